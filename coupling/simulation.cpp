@@ -1,0 +1,309 @@
+#include "coupling/simulation.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace wake {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+bool finite(const Vec3& v) { return v.allFinite(); }
+
+void require(bool ok, const std::string& field, const std::string& what) {
+  if (!ok) throw std::invalid_argument(field + ": " + what);
+}
+
+/// Bounds of everything finite in the scene: fluid blocks and bodies except planes.
+Aabb sceneBounds(const SimulationSettings& s) {
+  Aabb box;
+  for (const FluidBlock& b : s.blocks) {
+    box.extend(b.min);
+    box.extend(b.max);
+  }
+  const Aabb unbounded;  // empty clip: infinite shapes contribute nothing
+  for (const BodySettings& body : s.bodies) {
+    if (!body.shape) continue;
+    const Aabb local = body.shape->bounds(unbounded);
+    if (local.empty() || !local.min.allFinite() || !local.max.allFinite()) continue;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3 p((corner & 1) ? local.max.x() : local.min.x(),
+                   (corner & 2) ? local.max.y() : local.min.y(),
+                   (corner & 4) ? local.max.z() : local.min.z());
+      box.extend(body.pose.toWorld(p));
+    }
+  }
+  return box;
+}
+
+void validate(const SimulationSettings& s) {
+  const FluidParams& f = s.fluid;
+  require(finite(s.gravity), "gravity", "must be finite");
+  require(std::isfinite(f.particle_radius) && f.particle_radius > 0, "fluid.particle_radius",
+          "must be > 0");
+  require(std::isfinite(f.rest_density) && f.rest_density > 0, "fluid.rest_density",
+          "must be > 0");
+  require(std::isfinite(f.speed_of_sound) && f.speed_of_sound >= 0, "fluid.speed_of_sound",
+          "must be > 0 or auto");
+  require(std::isfinite(f.viscosity) && f.viscosity >= 0, "fluid.viscosity", "must be >= 0");
+  require(std::isfinite(f.gamma) && f.gamma > 0, "fluid.gamma", "must be > 0");
+  require(f.smoothing_ratio >= 0.8 && f.smoothing_ratio <= 2.0, "fluid.smoothing_ratio",
+          "must be in [0.8, 2]");
+  require(s.cfl > 0 && s.cfl <= 1, "time.cfl", "must be in (0, 1]");
+  require(std::isfinite(s.max_dt) && s.max_dt > 0, "time.max_dt", "must be > 0");
+  for (std::size_t i = 0; i < s.blocks.size(); ++i) {
+    const FluidBlock& b = s.blocks[i];
+    const std::string field = "fluid.blocks[" + std::to_string(i) + "]";
+    require(finite(b.min) && finite(b.max) && finite(b.velocity), field, "must be finite");
+    require((b.max.array() > b.min.array()).all(), field + ".max",
+            "must be greater than min on every axis");
+  }
+  for (std::size_t i = 0; i < s.bodies.size(); ++i) {
+    const BodySettings& b = s.bodies[i];
+    const std::string field = "bodies[" + std::to_string(i) + "]";
+    require(b.shape != nullptr, field + ".shape", "missing");
+    require(b.kind == BodyKind::Static, field + ".kind",
+            "only static bodies are supported by this simulation");
+    require(b.slip >= 0 && b.slip <= 1, field + ".slip", "must be in [0, 1]");
+    require(b.restitution >= 0 && b.restitution <= 1, field + ".restitution",
+            "must be in [0, 1]");
+    require(finite(b.pose.position) && b.pose.orientation.coeffs().allFinite(), field + ".position",
+            "must be finite");
+  }
+  require(s.method != CouplingMethod::Penalty, "coupling.method",
+          "penalty is not available in this version");
+}
+
+}  // namespace
+
+double autoSpeedOfSound(const SimulationSettings& s) {
+  const double g = s.gravity.norm();
+  const Vec3 up = g > 0 ? Vec3(-s.gravity / g) : Vec3(0, 1, 0);
+  // Fall height: from the highest fluid to the lowest point of the scene.
+  double fluid_top = -std::numeric_limits<double>::infinity();
+  double v_max = 0.0;
+  for (const FluidBlock& b : s.blocks) {
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3 p((corner & 1) ? b.max.x() : b.min.x(), (corner & 2) ? b.max.y() : b.min.y(),
+                   (corner & 4) ? b.max.z() : b.min.z());
+      fluid_top = std::max(fluid_top, p.dot(up));
+    }
+    v_max = std::max(v_max, b.velocity.norm());
+  }
+  for (const BodySettings& b : s.bodies) v_max = std::max(v_max, b.linear_velocity.norm());
+  const Aabb box = sceneBounds(s);
+  double bottom = fluid_top;
+  if (!box.empty()) {
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3 p((corner & 1) ? box.max.x() : box.min.x(),
+                   (corner & 2) ? box.max.y() : box.min.y(),
+                   (corner & 4) ? box.max.z() : box.min.z());
+      bottom = std::min(bottom, p.dot(up));
+    }
+  }
+  const double fall = std::max(0.0, fluid_top - bottom);
+  v_max = std::max({v_max, std::sqrt(2.0 * g * fall), 0.1});
+  return 10.0 * v_max;
+}
+
+Simulation::Simulation(SimulationSettings settings) : settings_(std::move(settings)) {
+  validate(settings_);
+  SimulationSettings& s = settings_;
+  if (s.fluid.speed_of_sound <= 0) s.fluid.speed_of_sound = autoSpeedOfSound(s);
+
+  if (s.domain.empty()) {
+    // Automatic domain: the scene's bounds grown by a quarter of their largest extent
+    // and two kernel supports on every side.
+    Aabb box = sceneBounds(s);
+    require(!box.empty(), "domain", "cannot be derived: the scene has no fluid and no bodies");
+    const double grow = 0.25 * (box.max - box.min).maxCoeff() + 2.0 * s.fluid.supportRadius();
+    box.min.array() -= grow;
+    box.max.array() += grow;
+    s.domain = box;
+  }
+  require(finite(s.domain.min) && finite(s.domain.max) &&
+              (s.domain.max.array() > s.domain.min.array()).all(),
+          "domain", "max must be greater than min on every axis");
+
+  fluid_ = std::make_unique<Fluid>(s.fluid, s.domain);
+  boundaries_ = std::make_unique<Boundaries>(s.fluid, s.domain);
+  for (const BodySettings& b : s.bodies) boundaries_->addBody(b);
+  boundaries_->updateWorld();
+
+  // Fill the blocks on the lattice; drop particles outside the domain, inside a body, or
+  // closer to a body's surface than their radius (starting overlap blows up runs).
+  const double sp = s.fluid.spacing();
+  const double rf = s.fluid.particle_radius;
+  FluidState& st = fluid_->state();
+  std::uint32_t next_id = 0;
+  for (const FluidBlock& b : s.blocks) {
+    Eigen::Vector3i count;
+    for (int k = 0; k < 3; ++k)
+      count[k] = std::max(1, static_cast<int>(std::lround((b.max[k] - b.min[k]) / sp)));
+    for (int k = 0; k < count[2]; ++k)
+      for (int j = 0; j < count[1]; ++j)
+        for (int i = 0; i < count[0]; ++i) {
+          const Vec3 x = b.min + sp * Vec3(i + 0.5, j + 0.5, k + 0.5);
+          const bool inside_domain = s.domain.contains(x);
+          if (!inside_domain || boundaries_->signedDistance(x) < (1.0 - 1e-6) * rf) {
+            ++removed_at_start_;
+            ++next_id;
+            continue;
+          }
+          st.append(x, b.velocity, next_id++);
+        }
+  }
+}
+
+Simulation::~Simulation() = default;
+
+std::size_t Simulation::boundaryParticles() const { return boundaries_->sampleCount(); }
+
+std::size_t Simulation::countPenetrating() const {
+  return boundaries_->countInside(fluid_->state().position);
+}
+
+void Simulation::removeOutsideDomain() {
+  FluidState& st = fluid_->state();
+  const std::size_t n = st.size();
+  flags_.assign(n, 0);
+  std::size_t out = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool bad = !settings_.domain.contains(st.position[i]) || !finite(st.position[i]);
+    flags_[i] = bad;
+    out += bad;
+  }
+  if (out == 0) return;
+  st.removeIf(flags_);
+  lost_ += out;
+}
+
+double Simulation::chooseDt(double t_limit) const {
+  const FluidParams& f = settings_.fluid;
+  const double h = f.smoothingLength();
+  const double v_max = fluid_->maxSpeed();
+  const double a_max = fluid_->maxAcceleration();
+  double dt = settings_.max_dt;
+  dt = std::min(dt, settings_.cfl * h / (f.speed_of_sound + v_max));
+  if (a_max > 0) dt = std::min(dt, 0.25 * std::sqrt(h / a_max));
+  // No particle may move more than its radius in one step (towards a boundary or not).
+  if (v_max > 0) dt = std::min(dt, f.particle_radius / v_max);
+  const double remaining = t_limit - time_;
+  // Land exactly on t_limit, and never leave a sliver step behind.
+  if (remaining <= dt) return remaining;
+  if (remaining < 1.5 * dt) return 0.5 * remaining;
+  return dt;
+}
+
+double Simulation::step(double t_limit) {
+  if (!(t_limit > time_)) return 0.0;
+  FluidState& st = fluid_->state();
+
+  auto t0 = Clock::now();
+  removeOutsideDomain();
+  fluid_->updateNeighbors();
+  timings_.neighbors += secondsSince(t0);
+
+  t0 = Clock::now();
+  fluid_->computeFluidDensity();
+  timings_.density += secondsSince(t0);
+  t0 = Clock::now();
+  boundaries_->addDensity(*fluid_, st.density);
+  timings_.boundary += secondsSince(t0);
+  t0 = Clock::now();
+  fluid_->computePressure();
+  timings_.density += secondsSince(t0);
+
+  t0 = Clock::now();
+  fluid_->computeAccelerations(settings_.gravity);
+  timings_.forces += secondsSince(t0);
+
+  // Predict: v* = v + dt a, x* = x + dt v* (all forces but the boundary's).
+  t0 = Clock::now();
+  const double dt = chooseDt(t_limit);
+  const std::int64_t n = static_cast<std::int64_t>(st.size());
+  x_old_.resize(st.size());
+  v_old_.resize(st.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i) {
+    v_old_[i] = st.velocity[i];
+    st.velocity[i] += dt * st.acceleration[i];
+    x_old_[i] = st.position[i] + dt * st.velocity[i];  // x*, predicted
+  }
+  timings_.integration += secondsSince(t0);
+
+  // Velocity control at the predicted positions.
+  t0 = Clock::now();
+  const std::size_t contacts = boundaries_->controlVelocities(x_old_, v_old_, st.velocity);
+  timings_.boundary += secondsSince(t0);
+
+  t0 = Clock::now();
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i) st.position[i] += dt * st.velocity[i];
+  timings_.integration += secondsSince(t0);
+
+  // Position correction against the bodies' final poses (static here).
+  t0 = Clock::now();
+  if (contacts > 0) boundaries_->correctPositions(st.position);
+  timings_.boundary += secondsSince(t0);
+
+  time_ = (t_limit - time_ == dt) ? t_limit : time_ + dt;
+  last_dt_ = dt;
+  ++steps_;
+
+  // Health: density ratio and penetration against the exact shapes.
+  double rho_max = 0.0;
+#pragma omp parallel for reduction(max : rho_max) schedule(static)
+  for (std::int64_t i = 0; i < n; ++i) rho_max = std::max(rho_max, st.density[i]);
+  max_density_ratio_ = std::max(max_density_ratio_, rho_max / settings_.fluid.rest_density);
+  max_penetrating_ = std::max(max_penetrating_, countPenetrating());
+  return dt;
+}
+
+void Simulation::advanceTo(double t) {
+  while (time_ < t) step(t);
+}
+
+void Simulation::snapshot(FluidSnapshot& out) const {
+  const FluidState& st = fluid_->state();
+  const std::size_t n = st.size();
+  std::vector<std::uint32_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = static_cast<std::uint32_t>(i);
+  std::sort(order.begin(), order.end(),
+            [&](std::uint32_t a, std::uint32_t b) { return st.id[a] < st.id[b]; });
+  out.id.resize(n);
+  out.position.resize(n);
+  out.velocity.resize(n);
+  out.density.resize(n);
+  out.pressure.resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::uint32_t i = order[k];
+    out.id[k] = st.id[i];
+    out.position[k] = st.position[i];
+    out.velocity[k] = st.velocity[i];
+    out.density[k] = st.density[i];
+    out.pressure[k] = st.pressure[i];
+  }
+}
+
+std::vector<BodyState> Simulation::bodyStates() const {
+  std::vector<BodyState> out;
+  for (std::size_t b = 0; b < boundaries_->bodyCount(); ++b) {
+    const BodySettings& body = boundaries_->body(b);
+    out.push_back({body.name, body.pose.position, body.pose.orientation, body.linear_velocity,
+                   body.angular_velocity});
+  }
+  return out;
+}
+
+}  // namespace wake

@@ -1,0 +1,170 @@
+#include "sph/fluid.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace wake {
+
+namespace {
+template <class T>
+void gather(const std::vector<T>& src, const std::vector<std::uint32_t>& order,
+            std::vector<T>& dst) {
+  dst.resize(order.size());
+  const std::int64_t n = static_cast<std::int64_t>(order.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t k = 0; k < n; ++k) dst[k] = src[order[k]];
+}
+
+template <class T>
+void compact(std::vector<T>& v, const std::vector<std::uint8_t>& remove) {
+  std::size_t w = 0;
+  for (std::size_t i = 0; i < v.size(); ++i)
+    if (!remove[i]) v[w++] = v[i];
+  v.resize(w);
+}
+}  // namespace
+
+void FluidState::resize(std::size_t n) {
+  position.resize(n);
+  velocity.resize(n);
+  acceleration.resize(n);
+  density.resize(n);
+  pressure.resize(n);
+  id.resize(n);
+}
+
+void FluidState::permute(const std::vector<std::uint32_t>& order, FluidState& scratch) {
+  // Persistent fields move with their particle. acceleration, density and pressure are
+  // derived each step after the sort, so they are only resized.
+  gather(position, order, scratch.position);
+  gather(velocity, order, scratch.velocity);
+  gather(id, order, scratch.id);
+  position.swap(scratch.position);
+  velocity.swap(scratch.velocity);
+  id.swap(scratch.id);
+  acceleration.resize(order.size());
+  density.resize(order.size());
+  pressure.resize(order.size());
+}
+
+void FluidState::removeIf(const std::vector<std::uint8_t>& remove) {
+  compact(position, remove);
+  compact(velocity, remove);
+  compact(acceleration, remove);
+  compact(density, remove);
+  compact(pressure, remove);
+  compact(id, remove);
+}
+
+void FluidState::append(const Vec3& x, const Vec3& v, std::uint32_t particle_id) {
+  position.push_back(x);
+  velocity.push_back(v);
+  acceleration.push_back(Vec3::Zero());
+  density.push_back(0.0);
+  pressure.push_back(0.0);
+  id.push_back(particle_id);
+}
+
+Fluid::Fluid(const FluidParams& params, const Aabb& domain)
+    : params_(params),
+      kernel_(params.smoothingLength()),
+      domain_(domain),
+      mass_(params.particleMass()),
+      tait_b_(params.rest_density * params.speed_of_sound * params.speed_of_sound / params.gamma),
+      grid_(domain, params.supportRadius()) {
+  if (!(params.speed_of_sound > 0.0) || !std::isfinite(params.speed_of_sound))
+    throw std::invalid_argument("fluid.speed_of_sound must be finite and > 0");
+}
+
+void Fluid::updateNeighbors() {
+  grid_.sort(state_.position, order_);
+  state_.permute(order_, scratch_);
+  buildNeighborList(grid_, state_.position, kernel_.supportRadius(), neighbors_);
+}
+
+void Fluid::computeFluidDensity() {
+  const std::int64_t n = static_cast<std::int64_t>(state_.size());
+  const Vec3* x = state_.position.data();
+  const std::uint32_t* nb = neighbors_.index.data();
+  const double self = mass_ * kernel_.value(0.0);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i) {
+    double sum = 0.0;
+    const Vec3 xi = x[i];
+    for (std::uint64_t k = neighbors_.offset[i], e = neighbors_.offset[i + 1]; k < e; ++k)
+      sum += kernel_.value((xi - x[nb[k]]).norm());
+    state_.density[i] = self + mass_ * sum;
+  }
+}
+
+void Fluid::computePressure() {
+  const std::int64_t n = static_cast<std::int64_t>(state_.size());
+  const double inv_rho0 = 1.0 / params_.rest_density;
+  const double gamma = params_.gamma;
+  const bool gamma7 = gamma == 7.0;
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i) {
+    const double ratio = state_.density[i] * inv_rho0;
+    double pw;
+    if (gamma7) {
+      const double r2 = ratio * ratio, r4 = r2 * r2;
+      pw = r4 * r2 * ratio;
+    } else {
+      pw = std::pow(ratio, gamma);
+    }
+    state_.pressure[i] = std::max(0.0, tait_b_ * (pw - 1.0));
+  }
+}
+
+void Fluid::computeAccelerations(const Vec3& gravity) {
+  const std::int64_t n = static_cast<std::int64_t>(state_.size());
+  const Vec3* x = state_.position.data();
+  const Vec3* v = state_.velocity.data();
+  const double* rho = state_.density.data();
+  const double* p = state_.pressure.data();
+  const std::uint32_t* nb = neighbors_.index.data();
+  const double h = kernel_.smoothingLength();
+  const double eps_sq = 0.01 * h * h;
+  // nu = 2 alpha H c / (rho_a + rho_b): the numerator is constant.
+  const double visc = 2.0 * params_.viscosity * h * params_.speed_of_sound;
+  const double m = mass_;
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i) {
+    const Vec3 xi = x[i], vi = v[i];
+    const double rho_i = rho[i];
+    const double pi_term = p[i] / (rho_i * rho_i);
+    Vec3 acc = Vec3::Zero();
+    for (std::uint64_t k = neighbors_.offset[i], e = neighbors_.offset[i + 1]; k < e; ++k) {
+      const std::uint32_t j = nb[k];
+      const Vec3 xij = xi - x[j];
+      const double r_sq = xij.squaredNorm();
+      const double dwr = kernel_.derivativeOverR(std::sqrt(r_sq));
+      double coeff = pi_term + p[j] / (rho[j] * rho[j]);
+      const double vx = (vi - v[j]).dot(xij);
+      if (vx < 0.0) coeff += -visc / (rho_i + rho[j]) * vx / (r_sq + eps_sq);
+      acc -= (m * coeff * dwr) * xij;
+    }
+    state_.acceleration[i] = acc + gravity;
+  }
+}
+
+double Fluid::maxSpeed() const {
+  double m = 0.0;
+  const std::int64_t n = static_cast<std::int64_t>(state_.size());
+#pragma omp parallel for reduction(max : m) schedule(static)
+  for (std::int64_t i = 0; i < n; ++i) m = std::max(m, state_.velocity[i].squaredNorm());
+  return std::sqrt(m);
+}
+
+double Fluid::maxAcceleration() const {
+  double m = 0.0;
+  const std::int64_t n = static_cast<std::int64_t>(state_.size());
+#pragma omp parallel for reduction(max : m) schedule(static)
+  for (std::int64_t i = 0; i < n; ++i) m = std::max(m, state_.acceleration[i].squaredNorm());
+  return std::sqrt(m);
+}
+
+}  // namespace wake

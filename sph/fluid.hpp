@@ -1,0 +1,94 @@
+// Weakly compressible SPH fluid (DESIGN.md §2): particle state, parameters, and the
+// per-step kernels (neighbours, density, pressure, accelerations). Knows nothing about
+// rigid bodies: boundaries enter only through the density share and velocity/position
+// control applied by the coupling module.
+#pragma once
+
+#include "sph/kernel.hpp"
+#include "sph/neighbor_grid.hpp"
+#include "sph/types.hpp"
+
+#include <cstdint>
+#include <vector>
+
+namespace wake {
+
+/// Constant parameters of the fluid.
+struct FluidParams {
+  double particle_radius = 0.01;   ///< m, > 0; lattice spacing is 2 * particle_radius
+  double rest_density = 1000.0;    ///< kg/m^3, > 0
+  double speed_of_sound = 0.0;     ///< m/s, > 0 (the scene's "auto" is resolved before)
+  double viscosity = 0.1;          ///< Monaghan's alpha, dimensionless, >= 0
+  double gamma = 7.0;              ///< Tait exponent, > 0
+  double smoothing_ratio = 1.0;    ///< smoothing length H / spacing, in [0.8, 2]
+
+  double spacing() const { return 2.0 * particle_radius; }
+  double smoothingLength() const { return smoothing_ratio * spacing(); }
+  double supportRadius() const { return 2.0 * smoothingLength(); }
+  /// Mass of one particle (kg): rest density times the lattice cell volume.
+  double particleMass() const { double s = spacing(); return rest_density * s * s * s; }
+};
+
+/// Changing state of the fluid: structure of arrays, all of length size(), kept in
+/// grid-cell order. `id` maps a slot to the particle's permanent number.
+struct FluidState {
+  std::vector<Vec3> position;      ///< (n) m
+  std::vector<Vec3> velocity;      ///< (n) m/s
+  std::vector<Vec3> acceleration;  ///< (n) m/s^2, fluid forces + gravity of this step
+  std::vector<double> density;     ///< (n) kg/m^3
+  std::vector<double> pressure;    ///< (n) Pa, >= 0
+  std::vector<std::uint32_t> id;   ///< (n) permanent particle number
+
+  std::size_t size() const { return position.size(); }
+  void resize(std::size_t n);
+  /// Applies `order` (new slot k takes old slot order[k]) to every per-particle array.
+  /// The one place that permutes particles: a new field must be added here.
+  void permute(const std::vector<std::uint32_t>& order, FluidState& scratch);
+  /// Removes the particles whose `remove` flag is set, keeping the others' order.
+  void removeIf(const std::vector<std::uint8_t>& remove);
+  void append(const Vec3& x, const Vec3& v, std::uint32_t particle_id);
+};
+
+/// The fluid solver: owns parameters, state, the neighbour grid and scratch space.
+class Fluid {
+ public:
+  Fluid(const FluidParams& params, const Aabb& domain);
+
+  const FluidParams& params() const { return params_; }
+  const CubicSplineKernel& kernel() const { return kernel_; }
+  const UniformGrid& grid() const { return grid_; }
+  const Aabb& domain() const { return domain_; }
+  double particleMass() const { return mass_; }
+
+  FluidState& state() { return state_; }
+  const FluidState& state() const { return state_; }
+  const NeighborList& neighbors() const { return neighbors_; }
+
+  /// Sorts particles by grid cell (permuting every array) and builds the neighbour lists.
+  /// Particles outside the domain must have been removed before.
+  void updateNeighbors();
+  /// Summation density over fluid neighbours (no boundary share; the coupling adds it).
+  void computeFluidDensity();
+  /// Tait pressure from density, clamped at zero (no tensile pull at free surfaces).
+  void computePressure();
+  /// Pressure + artificial viscosity + gravity accelerations.
+  void computeAccelerations(const Vec3& gravity);
+
+  /// Largest |v| and |a| over the particles (0 when empty).
+  double maxSpeed() const;
+  double maxAcceleration() const;
+
+ private:
+  FluidParams params_;
+  CubicSplineKernel kernel_;
+  Aabb domain_;
+  double mass_;
+  double tait_b_;  ///< rho0 c^2 / gamma (Pa)
+  UniformGrid grid_;
+  FluidState state_;
+  FluidState scratch_;
+  NeighborList neighbors_;
+  std::vector<std::uint32_t> order_;  ///< (n) scratch: cell-sort permutation
+};
+
+}  // namespace wake

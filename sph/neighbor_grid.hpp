@@ -1,0 +1,88 @@
+// Uniform grid with cell size = kernel support radius, over a fixed domain. Points are
+// counting-sorted by cell (x fastest), so the 3 cells of a row of the 3x3x3 block around a
+// point form one contiguous range of sorted points: a query visits 9 ranges.
+#pragma once
+
+#include "sph/types.hpp"
+
+#include <cstdint>
+#include <vector>
+
+namespace wake {
+
+class UniformGrid {
+ public:
+  UniformGrid() = default;
+  /// domain: box covering every point of interest (m); cell_size > 0 (m).
+  /// Throws std::invalid_argument when the grid would need more than `max_cells` cells.
+  UniformGrid(const Aabb& domain, double cell_size, std::size_t max_cells = 1u << 27);
+
+  double cellSize() const { return cell_size_; }
+  const Eigen::Vector3i& dims() const { return dims_; }
+  std::size_t cellCount() const { return static_cast<std::size_t>(dims_.prod()); }
+
+  /// Integer cell coordinates of p, clamped into the grid.
+  Eigen::Vector3i cellCoord(const Vec3& p) const {
+    Eigen::Vector3i c;
+    for (int k = 0; k < 3; ++k) {
+      int v = static_cast<int>(std::floor((p[k] - origin_[k]) * inv_cell_));
+      c[k] = v < 0 ? 0 : (v >= dims_[k] ? dims_[k] - 1 : v);
+    }
+    return c;
+  }
+  std::uint32_t cellIndex(const Eigen::Vector3i& c) const {
+    return static_cast<std::uint32_t>((c[2] * dims_[1] + c[1]) * dims_[0] + c[0]);
+  }
+  std::uint32_t cellIndex(const Vec3& p) const { return cellIndex(cellCoord(p)); }
+
+  /// Counting sort of `points` by cell. Afterwards `order[k]` is the input index of the
+  /// k-th sorted point, and sorted points of cell c are [cellStart(c), cellStart(c + 1)).
+  /// Stable: points of one cell keep their input order.
+  void sort(const std::vector<Vec3>& points, std::vector<std::uint32_t>& order);
+
+  std::uint32_t cellStart(std::uint32_t c) const { return cell_start_[c]; }
+
+  /// Calls f(lo, hi) for the <= 9 ranges [lo, hi) of sorted points in the 3x3x3 cells
+  /// around p (valid after sort(), with indices into the sorted order).
+  template <class F>
+  void forEachNeighborRange(const Vec3& p, F&& f) const {
+    const Eigen::Vector3i c = cellCoord(p);
+    const int x0 = c[0] > 0 ? c[0] - 1 : 0;
+    const int x1 = c[0] + 1 < dims_[0] ? c[0] + 1 : dims_[0] - 1;
+    for (int z = c[2] - 1; z <= c[2] + 1; ++z) {
+      if (z < 0 || z >= dims_[2]) continue;
+      for (int y = c[1] - 1; y <= c[1] + 1; ++y) {
+        if (y < 0 || y >= dims_[1]) continue;
+        const std::uint32_t row = static_cast<std::uint32_t>((z * dims_[1] + y) * dims_[0]);
+        const std::uint32_t lo = cell_start_[row + x0];
+        const std::uint32_t hi = cell_start_[row + x1 + 1];
+        if (lo < hi) f(lo, hi);
+      }
+    }
+  }
+
+ private:
+  Vec3 origin_ = Vec3::Zero();
+  double cell_size_ = 1.0, inv_cell_ = 1.0;
+  Eigen::Vector3i dims_ = Eigen::Vector3i::Ones();
+  std::vector<std::uint32_t> cell_start_;  // (cells + 1)
+  std::vector<std::uint32_t> cell_of_;     // (points) scratch
+};
+
+/// Flat neighbour lists: neighbours of point i are index[offset[i] .. offset[i + 1]).
+struct NeighborList {
+  std::vector<std::uint64_t> offset;  ///< (n + 1)
+  std::vector<std::uint32_t> index;   ///< (total pairs), never contains i itself
+
+  std::size_t size() const { return offset.empty() ? 0 : offset.size() - 1; }
+  std::uint64_t begin(std::size_t i) const { return offset[i]; }
+  std::uint64_t end(std::size_t i) const { return offset[i + 1]; }
+};
+
+/// Builds the lists of all sorted points within `radius` (strictly closer) of each point.
+/// `points` must be in the grid's sorted order. Gather-parallel (OpenMP); the result does
+/// not depend on the number of threads.
+void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
+                       NeighborList& out);
+
+}  // namespace wake

@@ -1,0 +1,45 @@
+// Basic types shared by every Wake module. All quantities are SI (m, kg, s).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <limits>
+
+namespace wake {
+
+using Vec3 = Eigen::Vector3d;
+using Quat = Eigen::Quaterniond;
+
+/// Axis-aligned box, in metres.
+struct Aabb {
+  Vec3 min = Vec3::Constant(std::numeric_limits<double>::infinity());
+  Vec3 max = Vec3::Constant(-std::numeric_limits<double>::infinity());
+
+  bool empty() const { return (min.array() > max.array()).any(); }
+  void extend(const Vec3& p) {
+    min = min.cwiseMin(p);
+    max = max.cwiseMax(p);
+  }
+  void extend(const Aabb& b) {
+    if (b.empty()) return;
+    min = min.cwiseMin(b.min);
+    max = max.cwiseMax(b.max);
+  }
+  bool contains(const Vec3& p) const {
+    return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
+  }
+};
+
+/// Rigid transform body -> world: x_world = orientation * x_body + position.
+struct Pose {
+  Vec3 position = Vec3::Zero();        ///< m
+  Quat orientation = Quat::Identity();  ///< unit quaternion
+
+  Vec3 toWorld(const Vec3& p) const { return orientation * p + position; }
+  Vec3 toBody(const Vec3& p) const { return orientation.conjugate() * (p - position); }
+  Vec3 rotate(const Vec3& d) const { return orientation * d; }
+};
+
+}  // namespace wake
