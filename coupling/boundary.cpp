@@ -177,9 +177,11 @@ std::size_t Boundaries::findContacts(const Vec3& x,
 
 std::size_t Boundaries::controlVelocities(const std::vector<Vec3>& x_pred,
                                           const std::vector<Vec3>& v_old,
-                                          std::vector<Vec3>& v) const {
-  if (position_.empty()) return 0;
+                                          std::vector<Vec3>& v,
+                                          std::vector<std::uint8_t>& in_contact_flag) const {
   const std::int64_t n = static_cast<std::int64_t>(x_pred.size());
+  in_contact_flag.assign(x_pred.size(), 0);
+  if (position_.empty()) return 0;
   std::size_t in_contact = 0;
 #pragma omp parallel for schedule(static) reduction(+ : in_contact)
   for (std::int64_t i = 0; i < n; ++i) {
@@ -187,6 +189,7 @@ std::size_t Boundaries::controlVelocities(const std::vector<Vec3>& x_pred,
     const std::size_t count = findContacts(x_pred[i], contacts);
     if (count == 0) continue;
     ++in_contact;
+    in_contact_flag[i] = 1;
     Vec3 vi = v[i];
     // Pass 0 sets each contact's full target (eq. 8-9). With several bodies, later
     // passes only remove approach velocity that an earlier contact's update re-created.
@@ -216,12 +219,14 @@ std::size_t Boundaries::controlVelocities(const std::vector<Vec3>& x_pred,
   return in_contact;
 }
 
-void Boundaries::correctPositions(std::vector<Vec3>& x) const {
+void Boundaries::correctPositions(std::vector<Vec3>& x,
+                                  const std::vector<std::uint8_t>& candidates) const {
   if (position_.empty()) return;
   const std::int64_t n = static_cast<std::int64_t>(x.size());
   const double rf = radius_;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
+    if (!candidates[i]) continue;
     Vec3 xi = x[i];
     std::array<Contact, kMaxContacts> contacts;
     for (int pass = 0; pass < 4; ++pass) {

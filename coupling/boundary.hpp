@@ -69,14 +69,18 @@ class Boundaries {
   /// Velocity control for one-way boundaries (eq. 8-9 with m_c -> inf):
   /// x_pred: positions predicted with v (= v*); v_old: velocities at the start of the step;
   /// v: predicted velocities v*, replaced by the controlled velocities where in contact.
+  /// in_contact: (n) set to 1 for particles with a contact, else 0.
   /// Returns the number of particles in contact.
   std::size_t controlVelocities(const std::vector<Vec3>& x_pred, const std::vector<Vec3>& v_old,
-                                std::vector<Vec3>& v) const;
+                                std::vector<Vec3>& v, std::vector<std::uint8_t>& in_contact) const;
 
   /// Position correction (eq. 19-20): moves fluid centres out to at least their radius
   /// from the tangent plane of their nearest overlapping sample, a few passes so that a
   /// particle in a corner or between bodies ends outside all of them.
-  void correctPositions(std::vector<Vec3>& x) const;
+  /// Only particles flagged in `candidates` are looked at: with bodies that did not move
+  /// since the velocity control, a particle without a contact at its predicted position
+  /// x* has none at its final one (uncontrolled particles end exactly at x*).
+  void correctPositions(std::vector<Vec3>& x, const std::vector<std::uint8_t>& candidates) const;
 
   /// Number of fluid centres strictly inside some body's exact shape.
   std::size_t countInside(const std::vector<Vec3>& x) const;

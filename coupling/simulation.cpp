@@ -244,7 +244,7 @@ double Simulation::step(double t_limit) {
 
   // Velocity control at the predicted positions.
   t0 = Clock::now();
-  const std::size_t contacts = boundaries_->controlVelocities(x_old_, v_old_, st.velocity);
+  const std::size_t contacts = boundaries_->controlVelocities(x_old_, v_old_, st.velocity, flags_);
   timings_.boundary += secondsSince(t0);
 
   t0 = Clock::now();
@@ -254,7 +254,7 @@ double Simulation::step(double t_limit) {
 
   // Position correction against the bodies' final poses (static here).
   t0 = Clock::now();
-  if (contacts > 0) boundaries_->correctPositions(st.position);
+  if (contacts > 0) boundaries_->correctPositions(st.position, flags_);
   timings_.boundary += secondsSince(t0);
 
   time_ = (t_limit - time_ == dt) ? t_limit : time_ + dt;

@@ -105,6 +105,7 @@ void Fluid::computePressure() {
   const double inv_rho0 = 1.0 / params_.rest_density;
   const double gamma = params_.gamma;
   const bool gamma7 = gamma == 7.0;
+  p_over_rho_sq_.resize(state_.size());
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
     const double ratio = state_.density[i] * inv_rho0;
@@ -115,7 +116,9 @@ void Fluid::computePressure() {
     } else {
       pw = std::pow(ratio, gamma);
     }
-    state_.pressure[i] = std::max(0.0, tait_b_ * (pw - 1.0));
+    const double p = std::max(0.0, tait_b_ * (pw - 1.0));
+    state_.pressure[i] = p;
+    p_over_rho_sq_[i] = p / (state_.density[i] * state_.density[i]);
   }
 }
 
@@ -124,7 +127,7 @@ void Fluid::computeAccelerations(const Vec3& gravity) {
   const Vec3* x = state_.position.data();
   const Vec3* v = state_.velocity.data();
   const double* rho = state_.density.data();
-  const double* p = state_.pressure.data();
+  const double* pr2 = p_over_rho_sq_.data();
   const std::uint32_t* nb = neighbors_.index.data();
   const double h = kernel_.smoothingLength();
   const double eps_sq = 0.01 * h * h;
@@ -135,14 +138,14 @@ void Fluid::computeAccelerations(const Vec3& gravity) {
   for (std::int64_t i = 0; i < n; ++i) {
     const Vec3 xi = x[i], vi = v[i];
     const double rho_i = rho[i];
-    const double pi_term = p[i] / (rho_i * rho_i);
+    const double pi_term = pr2[i];
     Vec3 acc = Vec3::Zero();
     for (std::uint64_t k = neighbors_.offset[i], e = neighbors_.offset[i + 1]; k < e; ++k) {
       const std::uint32_t j = nb[k];
       const Vec3 xij = xi - x[j];
       const double r_sq = xij.squaredNorm();
       const double dwr = kernel_.derivativeOverR(std::sqrt(r_sq));
-      double coeff = pi_term + p[j] / (rho[j] * rho[j]);
+      double coeff = pi_term + pr2[j];
       const double vx = (vi - v[j]).dot(xij);
       if (vx < 0.0) coeff += -visc / (rho_i + rho[j]) * vx / (r_sq + eps_sq);
       acc -= (m * coeff * dwr) * xij;

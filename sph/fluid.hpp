@@ -89,6 +89,7 @@ class Fluid {
   FluidState scratch_;
   NeighborList neighbors_;
   std::vector<std::uint32_t> order_;  ///< (n) scratch: cell-sort permutation
+  std::vector<double> p_over_rho_sq_;  ///< (n) P / rho^2 (m^5 / (kg s^2)), this step
 };
 
 }  // namespace wake

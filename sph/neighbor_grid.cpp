@@ -61,21 +61,25 @@ void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points,
     const std::size_t nt = static_cast<std::size_t>(omp_get_num_threads());
     const std::size_t lo = n * static_cast<std::size_t>(t) / nt;
     const std::size_t hi = n * static_cast<std::size_t>(t + 1) / nt;
-    local.clear();
+    // Branch-free append: write every candidate, advance the cursor only for neighbours.
+    std::size_t used = 0;
     for (std::size_t i = lo; i < hi; ++i) {
-      const Vec3 xi = points[i];
-      const std::size_t before = local.size();
-      grid.forEachNeighborRange(xi, [&](std::uint32_t b, std::uint32_t e) {
+      const double xi = points[i][0], yi = points[i][1], zi = points[i][2];
+      const std::size_t before = used;
+      grid.forEachNeighborRange(points[i], [&](std::uint32_t b, std::uint32_t e) {
+        if (local.size() < used + (e - b)) local.resize(2 * (used + (e - b)) + 1024);
+        std::uint32_t* dst = local.data();
         for (std::uint32_t j = b; j < e; ++j) {
-          const double dx = xi[0] - points[j][0];
-          const double dy = xi[1] - points[j][1];
-          const double dz = xi[2] - points[j][2];
-          if (dx * dx + dy * dy + dz * dz < radius_sq && j != i) local.push_back(j);
+          const double dx = xi - points[j][0];
+          const double dy = yi - points[j][1];
+          const double dz = zi - points[j][2];
+          dst[used] = j;
+          used += static_cast<std::size_t>((dx * dx + dy * dy + dz * dz < radius_sq) & (j != i));
         }
       });
-      out.offset[i + 1] = local.size() - before;
+      out.offset[i + 1] = used - before;
     }
-    chunk_size[static_cast<std::size_t>(t) + 1] = local.size();
+    chunk_size[static_cast<std::size_t>(t) + 1] = used;
 #pragma omp barrier
 #pragma omp single
     {
@@ -83,9 +87,9 @@ void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points,
       for (std::size_t k = 0; k < nt; ++k) chunk_size[k + 1] += chunk_size[k];
       out.index.resize(out.offset[n]);
     }
-    if (!local.empty())
+    if (used > 0)
       std::memcpy(out.index.data() + chunk_size[static_cast<std::size_t>(t)], local.data(),
-                  local.size() * sizeof(std::uint32_t));
+                  used * sizeof(std::uint32_t));
   }
 }
 

@@ -1,0 +1,306 @@
+// Analytic shapes: box, sphere, half space (plane) and open-top tank (DESIGN.md §3).
+//
+// Every distance and position here is in metres, in body space; areas in m^2.
+#include "coupling/shape.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace wake {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+bool isFinite(const Vec3& v) {
+  return v.allFinite();
+}
+
+std::string str(const Vec3& v) {
+  return "(" + std::to_string(v.x()) + ", " + std::to_string(v.y()) + ", " + std::to_string(v.z()) +
+         ")";
+}
+
+void checkSpacing(double spacing, double radius) {
+  if (!(spacing > 0.0) || !std::isfinite(spacing))
+    throw std::invalid_argument("shape sampling: spacing must be finite and > 0, got " +
+                                std::to_string(spacing));
+  if (!(radius >= 0.0) || !std::isfinite(radius))
+    throw std::invalid_argument("shape sampling: radius must be finite and >= 0, got " +
+                                std::to_string(radius));
+}
+
+/// Exact signed distance (m) to the box [lo, hi]; an infinite bound opens that side.
+double boxSignedDistance(const Vec3& p, const Vec3& lo, const Vec3& hi) {
+  // Per axis: > 0 outside the slab, < 0 inside it (depth to the nearer side).
+  const Vec3 q = (lo - p).cwiseMax(p - hi);
+  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+}
+
+/// Number of cells (>= 1) of about `spacing` (m) along a length (m).
+int cellCount(double length, double spacing) {
+  return std::max(1, static_cast<int>(std::lround(length / spacing)));
+}
+
+/// Samples the flat rectangle {corner + a u + b v : a in [0, len_u], b in [0, len_v]}
+/// (u, v unit and orthogonal, lengths in m) with outward unit normal `normal`: one sample
+/// per cell centre of an nu x nv grid of about `spacing`, placed `radius` below the surface.
+void sampleRectangle(const Vec3& corner, const Vec3& u, double len_u, const Vec3& v, double len_v,
+                     const Vec3& normal, double spacing, double radius, SurfaceSamples& out) {
+  if (!(len_u > 0.0) || !(len_v > 0.0)) return;
+  const int nu = cellCount(len_u, spacing);
+  const int nv = cellCount(len_v, spacing);
+  const double du = len_u / nu;  // m, cell size along u
+  const double dv = len_v / nv;  // m, cell size along v
+  for (int i = 0; i < nu; ++i) {
+    for (int j = 0; j < nv; ++j) {
+      const Vec3 surface_point = corner + ((i + 0.5) * du) * u + ((j + 0.5) * dv) * v;
+      out.position.push_back(surface_point - radius * normal);
+      out.normal.push_back(normal);
+      out.area.push_back(du * dv);
+    }
+  }
+}
+
+/// Samples the face of the box [lo, hi] whose outward normal is `sign` * e_axis.
+void sampleBoxFace(const Vec3& lo, const Vec3& hi, int axis, double sign, double spacing,
+                   double radius, SurfaceSamples& out) {
+  const int a = (axis + 1) % 3;
+  const int b = (axis + 2) % 3;
+  Vec3 corner = lo;
+  corner[axis] = sign > 0.0 ? hi[axis] : lo[axis];
+  const Vec3 normal = sign * Vec3::Unit(axis);
+  sampleRectangle(corner, Vec3::Unit(a), hi[a] - lo[a], Vec3::Unit(b), hi[b] - lo[b], normal,
+                  spacing, radius, out);
+}
+
+/// Samples all six faces of the box [lo, hi] (outward normals).
+void sampleBoxSurface(const Vec3& lo, const Vec3& hi, double spacing, double radius,
+                      SurfaceSamples& out) {
+  for (int axis = 0; axis < 3; ++axis) {
+    sampleBoxFace(lo, hi, axis, -1.0, spacing, radius, out);
+    sampleBoxFace(lo, hi, axis, +1.0, spacing, radius, out);
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+
+class BoxShape final : public Shape {
+ public:
+  explicit BoxShape(const Vec3& half_extents) : half_(half_extents) {}
+
+  const char* typeName() const override { return "box"; }
+
+  double signedDistance(const Vec3& p) const override {
+    return boxSignedDistance(p, -half_, half_);
+  }
+
+  Aabb bounds(const Aabb&) const override { return Aabb{-half_, half_}; }
+
+  void sample(double spacing, double radius, const Aabb&, SurfaceSamples& out) const override {
+    checkSpacing(spacing, radius);
+    sampleBoxSurface(-half_, half_, spacing, radius, out);
+  }
+
+ private:
+  Vec3 half_;  ///< m, half extents, > 0
+};
+
+class SphereShape final : public Shape {
+ public:
+  explicit SphereShape(double radius) : radius_(radius) {}
+
+  const char* typeName() const override { return "sphere"; }
+
+  double signedDistance(const Vec3& p) const override { return p.norm() - radius_; }
+
+  Aabb bounds(const Aabb&) const override {
+    return Aabb{Vec3::Constant(-radius_), Vec3::Constant(radius_)};
+  }
+
+  /// Fibonacci sphere: N nearly uniform directions, each standing for 4 pi R^2 / N.
+  void sample(double spacing, double radius, const Aabb&, SurfaceSamples& out) const override {
+    checkSpacing(spacing, radius);
+    const double total_area = 4.0 * kPi * radius_ * radius_;  // m^2
+    const long n = std::max(1L, std::lround(total_area / (spacing * spacing)));
+    const double golden_angle = kPi * (3.0 - std::sqrt(5.0));  // rad
+    for (long i = 0; i < n; ++i) {
+      const double y = 1.0 - 2.0 * (static_cast<double>(i) + 0.5) / static_cast<double>(n);
+      const double ring = std::sqrt(std::max(0.0, 1.0 - y * y));
+      const double phi = golden_angle * static_cast<double>(i);
+      const Vec3 normal(ring * std::cos(phi), y, ring * std::sin(phi));
+      out.position.push_back((radius_ - radius) * normal);
+      out.normal.push_back(normal);
+      out.area.push_back(total_area / static_cast<double>(n));
+    }
+  }
+
+ private:
+  double radius_;  ///< m, > 0
+};
+
+class PlaneShape final : public Shape {
+ public:
+  PlaneShape(const Vec3& normal, double offset) : normal_(normal.normalized()), offset_(offset) {
+    // Tangent basis: cross with the axis least aligned with the normal, so that an
+    // axis-aligned plane gets axis-aligned tangents.
+    Eigen::Index least = 0;
+    normal_.cwiseAbs().minCoeff(&least);
+    tangent_u_ = normal_.cross(Vec3::Unit(least)).normalized();
+    tangent_v_ = normal_.cross(tangent_u_);
+  }
+
+  const char* typeName() const override { return "plane"; }
+
+  double signedDistance(const Vec3& p) const override { return normal_.dot(p) - offset_; }
+
+  /// The half space is unbounded: the caller's box is a valid (if loose) bound.
+  Aabb bounds(const Aabb& clip) const override { return clip; }
+
+  /// Samples the rectangle of the plane covering the orthogonal projection of `clip`.
+  void sample(double spacing, double radius, const Aabb& clip, SurfaceSamples& out) const override {
+    checkSpacing(spacing, radius);
+    if (clip.empty() || !isFinite(clip.min) || !isFinite(clip.max)) return;
+    const Vec3 origin = offset_ * normal_;  // m, foot of the plane from the body origin
+    double u_lo = std::numeric_limits<double>::infinity(), u_hi = -u_lo;
+    double v_lo = u_lo, v_hi = -u_lo;
+    for (int c = 0; c < 8; ++c) {
+      const Vec3 corner((c & 1) ? clip.max.x() : clip.min.x(),
+                        (c & 2) ? clip.max.y() : clip.min.y(),
+                        (c & 4) ? clip.max.z() : clip.min.z());
+      const double u = tangent_u_.dot(corner - origin);
+      const double v = tangent_v_.dot(corner - origin);
+      u_lo = std::min(u_lo, u);
+      u_hi = std::max(u_hi, u);
+      v_lo = std::min(v_lo, v);
+      v_hi = std::max(v_hi, v);
+    }
+    sampleRectangle(origin + u_lo * tangent_u_ + v_lo * tangent_v_, tangent_u_, u_hi - u_lo,
+                    tangent_v_, v_hi - v_lo, normal_, spacing, radius, out);
+  }
+
+ private:
+  Vec3 normal_;     ///< unit outward normal (points out of the solid)
+  double offset_;   ///< m, solid is normal . p < offset
+  Vec3 tangent_u_;  ///< unit, orthogonal to normal_
+  Vec3 tangent_v_;  ///< unit, normal_ x tangent_u_
+};
+
+/// Open-top tank.  The solid is the outer box
+///   [min.x - t, max.x + t] x [min.y - t, max.y] x [min.z - t, max.z + t]
+/// minus the open cavity C = [min.x, max.x] x [min.y, +inf) x [min.z, max.z].
+///
+/// Its signed distance is exact everywhere:
+/// - outside C: max(sd_outer, -sd_C).  Inside the solid, the complement of the solid is
+///   (outside outer) U C, whose distance is min(-sd_outer, sd_C).  Outside both the outer box
+///   and C, the point of the outer box nearest to p is never in C's interior, so sd_outer is
+///   the exact distance.
+/// - inside C (fluid side, sd >= 0): the nearer of the floor (straight down) and the walls;
+///   above the rim the nearest wall point is the rim's inner edge.
+class TankShape final : public Shape {
+ public:
+  TankShape(const Vec3& min, const Vec3& max, double wall_thickness)
+      : min_(min), max_(max), t_(wall_thickness) {
+    outer_min_ = min_ - Vec3(t_, t_, t_);
+    outer_max_ = max_ + Vec3(t_, 0.0, t_);
+    cavity_max_ = Vec3(max_.x(), std::numeric_limits<double>::infinity(), max_.z());
+  }
+
+  const char* typeName() const override { return "tank"; }
+
+  double signedDistance(const Vec3& p) const override {
+    const bool in_cavity = p.x() >= min_.x() && p.x() <= max_.x() && p.z() >= min_.z() &&
+                           p.z() <= max_.z() && p.y() >= min_.y();
+    if (!in_cavity) {
+      return std::max(boxSignedDistance(p, outer_min_, outer_max_),
+                      -boxSignedDistance(p, min_, cavity_max_));
+    }
+    const double to_floor = p.y() - min_.y();
+    const double to_wall_plane =
+        std::min({p.x() - min_.x(), max_.x() - p.x(), p.z() - min_.z(), max_.z() - p.z()});
+    const double above_rim = std::max(0.0, p.y() - max_.y());
+    return std::min(to_floor, std::hypot(to_wall_plane, above_rim));
+  }
+
+  Aabb bounds(const Aabb&) const override { return Aabb{outer_min_, outer_max_}; }
+
+  /// 5 inner faces (floor top, 4 inner walls), 5 outer faces (bottom, 4 outer walls) and
+  /// the top rim as 4 strips of width t.
+  void sample(double spacing, double radius, const Aabb&, SurfaceSamples& out) const override {
+    checkSpacing(spacing, radius);
+    const Vec3 ex = Vec3::UnitX(), ey = Vec3::UnitY(), ez = Vec3::UnitZ();
+    const Vec3 size = max_ - min_;               // m, cavity size
+    const Vec3 outer = outer_max_ - outer_min_;  // m, outer box size
+
+    // Outer faces: the outer box's bottom and four sides (its top is rim + opening).
+    for (int axis = 0; axis < 3; ++axis) {
+      sampleBoxFace(outer_min_, outer_max_, axis, -1.0, spacing, radius, out);
+      if (axis != 1) sampleBoxFace(outer_min_, outer_max_, axis, +1.0, spacing, radius, out);
+    }
+    // Inner faces: floor top (normal +y) and the 4 inner walls (normals into the cavity).
+    sampleRectangle(min_, ez, size.z(), ex, size.x(), ey, spacing, radius, out);
+    sampleRectangle(min_, ey, size.y(), ez, size.z(), ex, spacing, radius, out);
+    sampleRectangle(Vec3(max_.x(), min_.y(), min_.z()), ez, size.z(), ey, size.y(), -ex, spacing,
+                    radius, out);
+    sampleRectangle(min_, ex, size.x(), ey, size.y(), ez, spacing, radius, out);
+    sampleRectangle(Vec3(min_.x(), min_.y(), max_.z()), ey, size.y(), ex, size.x(), -ez, spacing,
+                    radius, out);
+
+    // Top rim (y = max.y, normal +y): two full-length strips along x at the -z and +z sides,
+    // two short strips along z at the -x and +x sides.
+    const double top = max_.y();
+    sampleRectangle(Vec3(outer_min_.x(), top, outer_min_.z()), ez, t_, ex, outer.x(), ey, spacing,
+                    radius, out);
+    sampleRectangle(Vec3(outer_min_.x(), top, max_.z()), ez, t_, ex, outer.x(), ey, spacing, radius,
+                    out);
+    sampleRectangle(Vec3(outer_min_.x(), top, min_.z()), ez, size.z(), ex, t_, ey, spacing, radius,
+                    out);
+    sampleRectangle(Vec3(max_.x(), top, min_.z()), ez, size.z(), ex, t_, ey, spacing, radius, out);
+  }
+
+ private:
+  Vec3 min_, max_;  ///< m, cavity corners
+  double t_;        ///< m, wall and floor thickness, > 0
+  Vec3 outer_min_;  ///< m, outer box corners
+  Vec3 outer_max_;
+  Vec3 cavity_max_;  ///< m, max_ with y = +inf (the cavity is open above)
+};
+
+}  // namespace
+
+std::unique_ptr<Shape> makeBox(const Vec3& half_extents) {
+  if (!isFinite(half_extents) || (half_extents.array() <= 0.0).any())
+    throw std::invalid_argument("box: half_extents must be finite and > 0, got " +
+                                str(half_extents));
+  return std::make_unique<BoxShape>(half_extents);
+}
+
+std::unique_ptr<Shape> makeSphere(double radius) {
+  if (!std::isfinite(radius) || !(radius > 0.0))
+    throw std::invalid_argument("sphere: radius must be finite and > 0, got " +
+                                std::to_string(radius));
+  return std::make_unique<SphereShape>(radius);
+}
+
+std::unique_ptr<Shape> makePlane(const Vec3& normal, double offset) {
+  if (!isFinite(normal) || !(normal.norm() > 0.0))
+    throw std::invalid_argument("plane: normal must be finite and non-zero, got " + str(normal));
+  if (!std::isfinite(offset))
+    throw std::invalid_argument("plane: offset must be finite, got " + std::to_string(offset));
+  return std::make_unique<PlaneShape>(normal, offset);
+}
+
+std::unique_ptr<Shape> makeTank(const Vec3& min, const Vec3& max, double wall_thickness) {
+  if (!isFinite(min) || !isFinite(max) || (max.array() <= min.array()).any())
+    throw std::invalid_argument("tank: need finite min < max, got min " + str(min) + " max " +
+                                str(max));
+  if (!std::isfinite(wall_thickness) || !(wall_thickness > 0.0))
+    throw std::invalid_argument("tank: wall_thickness must be finite and > 0, got " +
+                                std::to_string(wall_thickness));
+  return std::make_unique<TankShape>(min, max, wall_thickness);
+}
+
+}  // namespace wake

@@ -1,0 +1,77 @@
+// The boundary's share of the density: no deficit next to a wall.
+#include "coupling/boundary.hpp"
+
+#include <gtest/gtest.h>
+
+using namespace wake;
+
+namespace {
+
+struct WallFixture {
+  FluidParams params;
+  Aabb domain{Vec3(-0.3, -0.2, -0.3), Vec3(0.3, 0.3, 0.3)};
+  std::unique_ptr<Fluid> fluid;
+  std::unique_ptr<Boundaries> walls;
+
+  explicit WallFixture(bool with_wall) {
+    params.particle_radius = 0.01;
+    params.speed_of_sound = 20.0;
+    fluid = std::make_unique<Fluid>(params, domain);
+    walls = std::make_unique<Boundaries>(params, domain);
+    if (with_wall) {
+      BodySettings floor;
+      floor.name = "floor";
+      floor.shape = makeBox(Vec3(0.2, 0.05, 0.2));
+      floor.pose.position = Vec3(0, -0.05, 0);  // top face at y = 0
+      walls->addBody(floor);
+    }
+    walls->updateWorld();
+    // Fluid lattice on the floor, aligned with the samples, first layer at y = r.
+    std::uint32_t id = 0;
+    for (int k = -6; k < 6; ++k)
+      for (int j = 0; j < 8; ++j)
+        for (int i = -6; i < 6; ++i)
+          fluid->state().append(Vec3(0.02 * i + 0.01, 0.02 * j + 0.01, 0.02 * k + 0.01),
+                                Vec3::Zero(), id++);
+    fluid->updateNeighbors();
+    fluid->computeFluidDensity();
+    walls->addDensity(*fluid, fluid->state().density);
+  }
+
+  double densityAt(const Vec3& p) const {
+    const FluidState& st = fluid->state();
+    for (std::size_t i = 0; i < st.size(); ++i)
+      if ((st.position[i] - p).norm() < 1e-9) return st.density[i];
+    ADD_FAILURE() << "no particle at " << p.transpose();
+    return 0;
+  }
+};
+
+}  // namespace
+
+TEST(WallDensity, FirstLayerAtRestDensity) {
+  WallFixture with(true), without(false);
+  const Vec3 first(0.01, 0.01, 0.01), second(0.01, 0.03, 0.01), interior(0.01, 0.07, 0.01);
+  EXPECT_NEAR(with.densityAt(first) / 1000.0, 1.0, 0.01);
+  EXPECT_NEAR(with.densityAt(second) / 1000.0, 1.0, 0.01);
+  EXPECT_NEAR(with.densityAt(interior) / 1000.0, 1.0, 0.01);
+  // Without the boundary's share the first layer is clearly under-dense.
+  EXPECT_LT(without.densityAt(first) / 1000.0, 0.9);
+  // The share does not reach beyond the kernel support.
+  EXPECT_EQ(with.densityAt(interior), without.densityAt(interior));
+}
+
+TEST(WallDensity, SampleVolumesMatchTheFluidLatticeOnAFlatFace) {
+  WallFixture with(true);
+  const Boundaries& w = *with.walls;
+  // Samples in the middle of the top face have the volume of one fluid particle, s^3.
+  std::size_t checked = 0;
+  for (std::size_t k = 0; k < w.sampleCount(); ++k) {
+    const Vec3& p = w.samplePositions()[k];
+    if (w.sampleNormals()[k].y() > 0.99 && std::abs(p.x()) < 0.1 && std::abs(p.z()) < 0.1) {
+      EXPECT_NEAR(w.sampleVolumes()[k], 0.02 * 0.02 * 0.02, 1e-9);
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 50u);
+}

@@ -1,0 +1,195 @@
+// Physics validation of static direct forcing: hydrostatics, dam break, slip, restitution,
+// determinism. Small resolutions so the suite stays fast; every run also asserts that no
+// fluid centre ends a step inside a body's exact shape.
+#include "coupling/simulation.hpp"
+#include "coupling/test_support.hpp"
+
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <map>
+
+using namespace wake;
+using wake::test::runWithoutPenetration;
+using wake::test::staticBody;
+using wake::test::tankScene;
+
+namespace {
+
+Vec3 centroid(const FluidState& st) {
+  Vec3 c = Vec3::Zero();
+  for (const Vec3& x : st.position) c += x;
+  return c / double(st.size());
+}
+
+Vec3 meanVelocity(const FluidState& st) {
+  Vec3 c = Vec3::Zero();
+  for (const Vec3& v : st.velocity) c += v;
+  return c / double(st.size());
+}
+
+}  // namespace
+
+TEST(Hydrostatic, PressureGrowsLinearlyWithDepthAndFluidRests) {
+  const double r = 0.005, height = 0.3;
+  SimulationSettings s =
+      tankScene(Vec3(0.1, 0.4, 0.1), {Vec3::Zero(), Vec3(0.1, height, 0.1), Vec3::Zero()}, r);
+  Simulation sim(s);
+  const std::size_t n0 = sim.fluidParticles();
+  runWithoutPenetration(sim, 1.5);
+  ASSERT_EQ(sim.fluidParticles(), n0);
+
+  // At rest: the largest speed is tiny compared with the free-fall speed of the column.
+  const double g = 9.81, rho0 = 1000.0;
+  EXPECT_LT(sim.fluid().maxSpeed(), 0.02 * std::sqrt(2 * g * height));
+
+  // Free surface: top of the highest particles.
+  const FluidState& st = sim.fluid().state();
+  double top = 0;
+  for (const Vec3& x : st.position) top = std::max(top, x.y() + r);
+  // Layer averages of pressure, away from the walls (3 spacings) and the surface.
+  std::map<int, std::pair<double, int>> layers;
+  for (std::size_t i = 0; i < st.size(); ++i) {
+    const Vec3& x = st.position[i];
+    if (x.x() < 0.03 || x.x() > 0.07 || x.z() < 0.03 || x.z() > 0.07) continue;
+    const int layer = int(std::floor(x.y() / (2 * r)));
+    layers[layer].first += st.pressure[i] - rho0 * g * (top - x.y());
+    layers[layer].second += 1;
+  }
+  int checked = 0;
+  for (const auto& [layer, acc] : layers) {
+    const double y = (layer + 0.5) * 2 * r;
+    const double depth = top - y;
+    if (depth < 0.08 || y < 0.03) continue;  // away from surface and floor
+    const double error = acc.first / acc.second;
+    EXPECT_LT(std::abs(error), 0.05 * rho0 * g * depth)
+        << "depth " << depth << ": p - rho g h = " << error << " Pa";
+    ++checked;
+  }
+  EXPECT_GE(checked, 15);
+}
+
+TEST(DamBreak, FrontReachesFarWallWithoutLeaksOrLoss) {
+  const double r = 0.005;
+  const Vec3 tank(0.6, 0.6, 0.05);
+  SimulationSettings s = tankScene(tank, {Vec3::Zero(), Vec3(0.15, 0.3, 0.05), Vec3::Zero()}, r);
+  Simulation sim(s);
+  const std::size_t n0 = sim.fluidParticles();
+  ASSERT_EQ(sim.removedAtStart(), 0u);
+  double front = 0.0;
+  while (sim.time() < 0.4) {
+    sim.step(0.4);
+    ASSERT_EQ(sim.countPenetrating(), 0u) << "t = " << sim.time();
+    for (const Vec3& x : sim.fluid().state().position) {
+      // Inside the cavity: nothing crossed a wall or the floor.
+      ASSERT_TRUE(x.x() > 0 && x.x() < tank.x() && x.z() > 0 && x.z() < tank.z() && x.y() > 0)
+          << "particle through a wall at " << x.transpose() << ", t = " << sim.time();
+      front = std::max(front, x.x());
+    }
+  }
+  EXPECT_GT(front, tank.x() - 3 * r);  // the surge reached the far wall
+  EXPECT_EQ(sim.fluidParticles(), n0);
+  EXPECT_EQ(sim.lostParticles(), 0u);
+  EXPECT_EQ(sim.maxPenetrating(), 0u);
+  EXPECT_LT(sim.maxDensityRatio(), 1.1);
+}
+
+namespace {
+
+/// Fluid block dropped onto a ramp tilted 25 degrees; returns the downhill distance its
+/// centroid travelled after `t` seconds.
+double slideDistance(double slip, double t) {
+  const double r = 0.005;
+  SimulationSettings s;
+  s.fluid.particle_radius = r;
+  Pose ramp;
+  ramp.orientation = Quat(Eigen::AngleAxisd(-25.0 * M_PI / 180.0, Vec3::UnitZ()));
+  s.bodies.push_back(staticBody("ramp", makeBox(Vec3(0.5, 0.02, 0.08)), slip, 0.0, ramp));
+  const Vec3 start = ramp.toWorld(Vec3(-0.38, 0.02, 0.0));
+  s.blocks.push_back({start + Vec3(0, 0.012, -0.03), start + Vec3(0.06, 0.042, 0.03), Vec3::Zero()});
+  s.domain = Aabb{Vec3(-0.6, -0.5, -0.2), Vec3(0.6, 0.5, 0.2)};
+  Simulation sim(s);
+  const Vec3 c0 = centroid(sim.fluid().state());
+  runWithoutPenetration(sim, t);
+  const Vec3 downhill = ramp.rotate(Vec3::UnitX());
+  return (centroid(sim.fluid().state()) - c0).dot(downhill);
+}
+
+}  // namespace
+
+TEST(Slip, FreeSlipSlidesFurtherThanNoSlip) {
+  const double t = 0.3;
+  const double free_slip = slideDistance(1.0, t);
+  const double no_slip = slideDistance(0.0, t);
+  std::printf("[ slip ] downhill distance after %.2f s: eps=1 %.4f m, eps=0 %.4f m\n", t,
+              free_slip, no_slip);
+  // Frictionless sliding: a = g sin(25 deg) once on the ramp.
+  EXPECT_GT(free_slip, 1.3 * no_slip);
+  EXPECT_GT(free_slip, 0.05);
+}
+
+namespace {
+
+/// Drops fluid onto a static floor and returns the largest upward centroid velocity seen
+/// after the first touch, relative to the impact speed.
+double reboundRatio(double restitution, const FluidBlock& block, double t_end) {
+  const double r = 0.005;
+  SimulationSettings s;
+  s.fluid.particle_radius = r;
+  s.gravity = Vec3(0, -9.81, 0);
+  s.bodies.push_back(staticBody("floor", makeBox(Vec3(0.15, 0.02, 0.15)), 0.0, restitution,
+                                Pose{Vec3(0, -0.02, 0), Quat::Identity()}));
+  s.blocks.push_back(block);
+  Simulation sim(s);
+  double impact = 0.0, rebound = 0.0;
+  while (sim.time() < t_end) {
+    sim.step(t_end);
+    EXPECT_EQ(sim.countPenetrating(), 0u) << "t = " << sim.time();
+    const double vy = meanVelocity(sim.fluid().state()).y();
+    impact = std::max(impact, -vy);
+    rebound = std::max(rebound, vy);
+  }
+  return impact > 0 ? rebound / impact : 0.0;
+}
+
+}  // namespace
+
+TEST(Restitution, SingleParticleBouncesOnlyWithRestitution) {
+  const FluidBlock drop{Vec3(-0.005, 0.05, -0.005), Vec3(0.005, 0.06, 0.005), Vec3::Zero()};
+  const double elastic = reboundRatio(1.0, drop, 0.2);
+  const double inelastic = reboundRatio(0.0, drop, 0.2);
+  std::printf("[ restitution ] one particle: rebound/impact delta=1 %.3f, delta=0 %.3f\n",
+              elastic, inelastic);
+  EXPECT_GT(elastic, 0.9);
+  EXPECT_LT(inelastic, 0.05);
+}
+
+TEST(Restitution, BlockReboundsWithDeltaOneAndNotWithZero) {
+  const FluidBlock block{Vec3(-0.04, 0.03, -0.04), Vec3(0.04, 0.05, 0.04), Vec3::Zero()};
+  const double elastic = reboundRatio(1.0, block, 0.15);
+  const double inelastic = reboundRatio(0.0, block, 0.15);
+  std::printf("[ restitution ] block: rebound/impact delta=1 %.3f, delta=0 %.3f\n", elastic,
+              inelastic);
+  EXPECT_GT(elastic, 0.3);
+  EXPECT_LT(inelastic, 0.1);
+  EXPECT_GT(elastic, 3.0 * inelastic);
+}
+
+TEST(Determinism, SameStateWithOneAndTwoThreads) {
+  auto run = [](int threads) {
+    omp_set_num_threads(threads);
+    SimulationSettings s =
+        tankScene(Vec3(0.3, 0.3, 0.05), {Vec3::Zero(), Vec3(0.1, 0.2, 0.05), Vec3::Zero()}, 0.005);
+    Simulation sim(s);
+    for (int i = 0; i < 200; ++i) sim.step(1.0);
+    FluidSnapshot snap;
+    sim.snapshot(snap);
+    return std::make_pair(sim.time(), snap.position);
+  };
+  const auto one = run(1);
+  const auto two = run(2);
+  EXPECT_EQ(one.first, two.first);
+  ASSERT_EQ(one.second.size(), two.second.size());
+  for (std::size_t i = 0; i < one.second.size(); ++i) ASSERT_EQ(one.second[i], two.second[i]);
+}
