@@ -39,7 +39,21 @@ Boundaries::Boundaries(const FluidParams& fluid, const Aabb& domain)
       spacing_(fluid.spacing()),
       radius_(fluid.particle_radius),
       volume_scale_(spacing_ * spacing_ * spacing_ * flatLatticeKernelSum(kernel_, spacing_)),
-      grid_(domain, fluid.supportRadius()) {}
+      grid_(makeGrid(domain, fluid.supportRadius())) {
+  // Cells of half the support: the density share searches 2 cells around a particle,
+  // contacts (reach r_f + r_b = half the support) only 1.
+  auto cellsToCover = [&](double distance) {
+    return std::max(1, static_cast<int>(std::ceil(distance / grid_.cellSize() - 1e-12)));
+  };
+  density_reach_ = cellsToCover(kernel_.supportRadius());
+  contact_reach_ = cellsToCover(2.0 * radius_);
+}
+
+UniformGrid Boundaries::makeGrid(const Aabb& domain, double support) {
+  if (UniformGrid::cellsFor(domain, 0.5 * support) <= double(UniformGrid::kMaxCells))
+    return UniformGrid(domain, 0.5 * support, UniformGrid::kMaxCells, 2);
+  return UniformGrid(domain, support, UniformGrid::kMaxCells, 1);
+}
 
 std::size_t Boundaries::addBody(const BodySettings& settings) {
   if (!settings.shape) throw std::invalid_argument("body '" + settings.name + "' has no shape");
@@ -107,15 +121,19 @@ void Boundaries::updateWorld() {
     volume_[k] = volume_scale_ / sum;
   }
 
-  // Cells whose 3x3x3 block holds a sample: only fluid there can feel the boundary.
+  // Flag the cells from which a sample can be within the kernel support or contact reach.
   near_.assign(grid_.cellCount(), 0);
   const Eigen::Vector3i dims = grid_.dims();
+  auto mark = [&](const Eigen::Vector3i& c, int reach, std::uint8_t bit) {
+    for (int z = std::max(0, c[2] - reach); z <= std::min(dims[2] - 1, c[2] + reach); ++z)
+      for (int y = std::max(0, c[1] - reach); y <= std::min(dims[1] - 1, c[1] + reach); ++y)
+        for (int x = std::max(0, c[0] - reach); x <= std::min(dims[0] - 1, c[0] + reach); ++x)
+          near_[grid_.cellIndex(Eigen::Vector3i(x, y, z))] |= bit;
+  };
   for (std::size_t k = 0; k < total; ++k) {
     const Eigen::Vector3i c = grid_.cellCoord(position_[k]);
-    for (int z = std::max(0, c[2] - 1); z <= std::min(dims[2] - 1, c[2] + 1); ++z)
-      for (int y = std::max(0, c[1] - 1); y <= std::min(dims[1] - 1, c[1] + 1); ++y)
-        for (int x = std::max(0, c[0] - 1); x <= std::min(dims[0] - 1, c[0] + 1); ++x)
-          near_[grid_.cellIndex(Eigen::Vector3i(x, y, z))] = 1;
+    mark(c, density_reach_, kNearDensity);
+    mark(c, contact_reach_, kNearContact);
   }
 }
 
@@ -128,9 +146,9 @@ void Boundaries::addDensity(const Fluid& fluid, std::vector<double>& density) co
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
     const Vec3 xi = x[i];
-    if (!nearBoundary(xi)) continue;
+    if (!near(xi, kNearDensity)) continue;
     double sum = 0.0;
-    grid_.forEachNeighborRange(xi, [&](std::uint32_t lo, std::uint32_t hi) {
+    grid_.forEachRangeWithin(xi, density_reach_, [&](std::uint32_t lo, std::uint32_t hi) {
       for (std::uint32_t k = lo; k < hi; ++k) {
         const double d_sq = (xi - position_[k]).squaredNorm();
         if (d_sq < support_sq) sum += volume_[k] * kernel_.value(std::sqrt(d_sq));
@@ -142,11 +160,11 @@ void Boundaries::addDensity(const Fluid& fluid, std::vector<double>& density) co
 
 std::size_t Boundaries::findContacts(const Vec3& x,
                                      std::array<Contact, kMaxContacts>& out) const {
-  if (position_.empty() || !nearBoundary(x)) return 0;
+  if (position_.empty() || !near(x, kNearContact)) return 0;
   const double reach = radius_ + radius_;  // r_f + r_b
   const double reach_sq = reach * reach;
   std::size_t count = 0;
-  grid_.forEachNeighborRange(x, [&](std::uint32_t lo, std::uint32_t hi) {
+  grid_.forEachRangeWithin(x, contact_reach_, [&](std::uint32_t lo, std::uint32_t hi) {
     for (std::uint32_t k = lo; k < hi; ++k) {
       const double d_sq = (x - position_[k]).squaredNorm();
       if (d_sq >= reach_sq) continue;

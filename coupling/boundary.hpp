@@ -100,7 +100,12 @@ class Boundaries {
     Aabb world_bounds;     ///< bounds of the exact shape in world space (clipped)
     std::uint32_t first = 0;  ///< first of its samples in the unsorted world arrays
   };
-  bool nearBoundary(const Vec3& x) const { return near_[grid_.cellIndex(x)] != 0; }
+  /// Bit 1: a sample within the kernel support may exist; bit 2: within contact reach.
+  static constexpr std::uint8_t kNearDensity = 1, kNearContact = 2;
+  bool near(const Vec3& x, std::uint8_t what) const {
+    return (near_[grid_.cellIndex(x)] & what) != 0;
+  }
+  static UniformGrid makeGrid(const Aabb& domain, double support);
 
   FluidParams fluid_;
   CubicSplineKernel kernel_;
@@ -113,7 +118,9 @@ class Boundaries {
   std::vector<Vec3> position_, normal_;
   std::vector<double> volume_;
   std::vector<std::uint32_t> body_of_;
-  std::vector<std::uint8_t> near_;  ///< (cells) 1 where a sample lies in the 3x3x3 block
+  int density_reach_ = 1;  ///< cells to search for the kernel support
+  int contact_reach_ = 1;  ///< cells to search for contacts (r_f + r_b)
+  std::vector<std::uint8_t> near_;  ///< (cells) kNear* bits: samples within reach
   std::vector<std::uint32_t> order_;  ///< scratch
 };
 

@@ -80,6 +80,28 @@ Fluid::Fluid(const FluidParams& params, const Aabb& domain)
 }
 
 void Fluid::updateNeighbors() {
+  // Fit the grid to the particles' current bounds: cells of half the support radius
+  // (125 small cells per query, fewer candidates) while that grid stays small; else
+  // cells of the full support (the domain-sized fallback checked at construction).
+  const std::int64_t n = static_cast<std::int64_t>(state_.size());
+  double lo[3] = {domain_.max.x(), domain_.max.y(), domain_.max.z()};
+  double hi[3] = {domain_.min.x(), domain_.min.y(), domain_.min.z()};
+#pragma omp parallel for schedule(static) reduction(min : lo[:3]) reduction(max : hi[:3])
+  for (std::int64_t i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], state_.position[i][k]);
+      hi[k] = std::max(hi[k], state_.position[i][k]);
+    }
+  const double support = kernel_.supportRadius();
+  Aabb box{Vec3(lo[0], lo[1], lo[2]), Vec3(hi[0], hi[1], hi[2])};
+  if (box.empty()) box = domain_;
+  const double fine = 0.5 * support;
+  const double fine_cells = UniformGrid::cellsFor(box, fine);
+  if (fine_cells <= std::max(8.0 * double(n), 65536.0) &&
+      fine_cells <= double(UniformGrid::kMaxCells))
+    grid_.reset(box, fine, 2);
+  else
+    grid_.reset(domain_, support, 1);
   grid_.sort(state_.position, order_);
   state_.permute(order_, scratch_);
   buildNeighborList(grid_, state_.position, kernel_.supportRadius(), neighbors_);

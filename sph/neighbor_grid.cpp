@@ -10,21 +10,32 @@
 
 namespace wake {
 
-UniformGrid::UniformGrid(const Aabb& domain, double cell_size, std::size_t max_cells)
-    : origin_(domain.min), cell_size_(cell_size), inv_cell_(1.0 / cell_size) {
-  if (!(cell_size > 0.0)) throw std::invalid_argument("grid cell size must be > 0");
-  if (domain.empty()) throw std::invalid_argument("grid domain is empty");
+double UniformGrid::cellsFor(const Aabb& box, double cell_size) {
   double cells = 1.0;
-  for (int k = 0; k < 3; ++k) {
-    const double n = std::max(1.0, std::ceil((domain.max[k] - domain.min[k]) * inv_cell_));
-    cells *= n;
-    if (!(cells <= static_cast<double>(max_cells)))
-      throw std::invalid_argument("domain too large for the kernel support: " +
-                                  std::to_string(static_cast<long long>(cells)) +
-                                  "+ grid cells (limit " + std::to_string(max_cells) +
-                                  "); shrink the domain or increase the particle radius");
-    dims_[k] = static_cast<int>(n);
-  }
+  for (int k = 0; k < 3; ++k) cells *= std::max(1.0, std::ceil((box.max[k] - box.min[k]) / cell_size));
+  return cells;
+}
+
+UniformGrid::UniformGrid(const Aabb& domain, double cell_size, std::size_t max_cells, int reach) {
+  if (!(cell_size > 0.0)) throw std::invalid_argument("grid cell size must be > 0");
+  if (reach < 1) throw std::invalid_argument("grid reach must be >= 1");
+  if (domain.empty()) throw std::invalid_argument("grid domain is empty");
+  const double cells = cellsFor(domain, cell_size);
+  if (!(cells <= static_cast<double>(max_cells)))
+    throw std::invalid_argument("domain too large for the kernel support: " +
+                                std::to_string(static_cast<long long>(cells)) +
+                                " grid cells (limit " + std::to_string(max_cells) +
+                                "); shrink the domain or increase the particle radius");
+  reset(domain, cell_size, reach);
+}
+
+void UniformGrid::reset(const Aabb& box, double cell_size, int reach) {
+  origin_ = box.min;
+  cell_size_ = cell_size;
+  inv_cell_ = 1.0 / cell_size;
+  reach_ = reach;
+  for (int k = 0; k < 3; ++k)
+    dims_[k] = static_cast<int>(std::max(1.0, std::ceil((box.max[k] - box.min[k]) * inv_cell_)));
   cell_start_.assign(cellCount() + 1, 0);
 }
 

@@ -1,6 +1,8 @@
-// Uniform grid with cell size = kernel support radius, over a fixed domain. Points are
-// counting-sorted by cell (x fastest), so the 3 cells of a row of the 3x3x3 block around a
-// point form one contiguous range of sorted points: a query visits 9 ranges.
+// Uniform grid over a box. Points are counting-sorted by cell (x fastest), so the cells of
+// one x-row of the block around a point form one contiguous range of sorted points. With
+// `reach` r, a query visits the (2r+1)^3 cells around a point as (2r+1)^2 ranges: cell size
+// = support radius with r = 1 (27 cells), or support / 2 with r = 2 (125 smaller cells,
+// about 40% fewer candidates to test).
 #pragma once
 
 #include "sph/types.hpp"
@@ -13,11 +15,22 @@ namespace wake {
 class UniformGrid {
  public:
   UniformGrid() = default;
-  /// domain: box covering every point of interest (m); cell_size > 0 (m).
+  /// domain: box covering every point of interest (m); cell_size > 0 (m); reach >= 1 cells.
   /// Throws std::invalid_argument when the grid would need more than `max_cells` cells.
-  UniformGrid(const Aabb& domain, double cell_size, std::size_t max_cells = 1u << 27);
+  UniformGrid(const Aabb& domain, double cell_size, std::size_t max_cells = kMaxCells,
+              int reach = 1);
+
+  static constexpr std::size_t kMaxCells = std::size_t(1) << 27;
+
+  /// Re-fits the grid to a new box, cell size and reach, reusing its memory (no checks
+  /// beyond the constructor's: the caller keeps the cell count bounded).
+  void reset(const Aabb& box, double cell_size, int reach);
+
+  /// Number of cells a grid over `box` with `cell_size` has (as a double: may be huge).
+  static double cellsFor(const Aabb& box, double cell_size);
 
   double cellSize() const { return cell_size_; }
+  int reach() const { return reach_; }
   const Eigen::Vector3i& dims() const { return dims_; }
   std::size_t cellCount() const { return static_cast<std::size_t>(dims_.prod()); }
 
@@ -42,17 +55,25 @@ class UniformGrid {
 
   std::uint32_t cellStart(std::uint32_t c) const { return cell_start_[c]; }
 
-  /// Calls f(lo, hi) for the <= 9 ranges [lo, hi) of sorted points in the 3x3x3 cells
-  /// around p (valid after sort(), with indices into the sorted order).
+  /// Calls f(lo, hi) for the <= (2 reach + 1)^2 ranges [lo, hi) of sorted points in the
+  /// cells within `reach` of p's cell (valid after sort(); indices into the sorted order).
   template <class F>
   void forEachNeighborRange(const Vec3& p, F&& f) const {
+    forEachRangeWithin(p, reach_, f);
+  }
+
+  /// As forEachNeighborRange, with the cells within `reach` (>= 0) of p's cell.
+  template <class F>
+  void forEachRangeWithin(const Vec3& p, int reach, F&& f) const {
     const Eigen::Vector3i c = cellCoord(p);
-    const int x0 = c[0] > 0 ? c[0] - 1 : 0;
-    const int x1 = c[0] + 1 < dims_[0] ? c[0] + 1 : dims_[0] - 1;
-    for (int z = c[2] - 1; z <= c[2] + 1; ++z) {
-      if (z < 0 || z >= dims_[2]) continue;
-      for (int y = c[1] - 1; y <= c[1] + 1; ++y) {
-        if (y < 0 || y >= dims_[1]) continue;
+    const int x0 = c[0] - reach > 0 ? c[0] - reach : 0;
+    const int x1 = c[0] + reach < dims_[0] ? c[0] + reach : dims_[0] - 1;
+    const int z0 = c[2] - reach > 0 ? c[2] - reach : 0;
+    const int z1 = c[2] + reach < dims_[2] ? c[2] + reach : dims_[2] - 1;
+    const int y0 = c[1] - reach > 0 ? c[1] - reach : 0;
+    const int y1 = c[1] + reach < dims_[1] ? c[1] + reach : dims_[1] - 1;
+    for (int z = z0; z <= z1; ++z) {
+      for (int y = y0; y <= y1; ++y) {
         const std::uint32_t row = static_cast<std::uint32_t>((z * dims_[1] + y) * dims_[0]);
         const std::uint32_t lo = cell_start_[row + x0];
         const std::uint32_t hi = cell_start_[row + x1 + 1];
@@ -64,6 +85,7 @@ class UniformGrid {
  private:
   Vec3 origin_ = Vec3::Zero();
   double cell_size_ = 1.0, inv_cell_ = 1.0;
+  int reach_ = 1;
   Eigen::Vector3i dims_ = Eigen::Vector3i::Ones();
   std::vector<std::uint32_t> cell_start_;  // (cells + 1)
   std::vector<std::uint32_t> cell_of_;     // (points) scratch

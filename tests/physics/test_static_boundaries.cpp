@@ -32,9 +32,9 @@ Vec3 meanVelocity(const FluidState& st) {
 }  // namespace
 
 TEST(Hydrostatic, PressureGrowsLinearlyWithDepthAndFluidRests) {
-  const double r = 0.005, height = 0.3;
+  const double r = 0.005, height = 0.25;
   SimulationSettings s =
-      tankScene(Vec3(0.1, 0.4, 0.1), {Vec3::Zero(), Vec3(0.1, height, 0.1), Vec3::Zero()}, r);
+      tankScene(Vec3(0.08, 0.3, 0.08), {Vec3::Zero(), Vec3(0.08, height, 0.08), Vec3::Zero()}, r);
   Simulation sim(s);
   const std::size_t n0 = sim.fluidParticles();
   runWithoutPenetration(sim, 1.5);
@@ -52,7 +52,7 @@ TEST(Hydrostatic, PressureGrowsLinearlyWithDepthAndFluidRests) {
   std::map<int, std::pair<double, int>> layers;
   for (std::size_t i = 0; i < st.size(); ++i) {
     const Vec3& x = st.position[i];
-    if (x.x() < 0.03 || x.x() > 0.07 || x.z() < 0.03 || x.z() > 0.07) continue;
+    if (x.x() < 0.03 || x.x() > 0.05 || x.z() < 0.03 || x.z() > 0.05) continue;
     const int layer = int(std::floor(x.y() / (2 * r)));
     layers[layer].first += st.pressure[i] - rho0 * g * (top - x.y());
     layers[layer].second += 1;
@@ -63,11 +63,13 @@ TEST(Hydrostatic, PressureGrowsLinearlyWithDepthAndFluidRests) {
     const double depth = top - y;
     if (depth < 0.08 || y < 0.03) continue;  // away from surface and floor
     const double error = acc.first / acc.second;
+    std::printf("[ hydrostatic ] depth %.3f m: rho g h = %8.1f Pa, p - rho g h = %7.1f Pa (%+.1f%%)\n",
+                depth, rho0 * g * depth, error, 100.0 * error / (rho0 * g * depth));
     EXPECT_LT(std::abs(error), 0.05 * rho0 * g * depth)
         << "depth " << depth << ": p - rho g h = " << error << " Pa";
     ++checked;
   }
-  EXPECT_GE(checked, 15);
+  EXPECT_GE(checked, 10);
 }
 
 TEST(DamBreak, FrontReachesFarWallWithoutLeaksOrLoss) {
@@ -165,15 +167,17 @@ TEST(Restitution, SingleParticleBouncesOnlyWithRestitution) {
   EXPECT_LT(inelastic, 0.05);
 }
 
-TEST(Restitution, BlockReboundsWithDeltaOneAndNotWithZero) {
-  const FluidBlock block{Vec3(-0.04, 0.03, -0.04), Vec3(0.04, 0.05, 0.04), Vec3::Zero()};
-  const double elastic = reboundRatio(1.0, block, 0.15);
-  const double inelastic = reboundRatio(0.0, block, 0.15);
-  std::printf("[ restitution ] block: rebound/impact delta=1 %.3f, delta=0 %.3f\n", elastic,
+TEST(Restitution, ParticleSheetReboundsWithDeltaOneAndNotWithZero) {
+  // A block one particle thick (8 x 1 x 8): every particle meets the floor, so the block's
+  // rebound is the boundary's restitution. (In thicker blocks only the touching layer is
+  // reflected and the fluid's own pressure response dominates the rebound.)
+  const FluidBlock sheet{Vec3(-0.04, 0.03, -0.04), Vec3(0.04, 0.04, 0.04), Vec3::Zero()};
+  const double elastic = reboundRatio(1.0, sheet, 0.2);
+  const double inelastic = reboundRatio(0.0, sheet, 0.2);
+  std::printf("[ restitution ] sheet: rebound/impact delta=1 %.3f, delta=0 %.3f\n", elastic,
               inelastic);
-  EXPECT_GT(elastic, 0.3);
-  EXPECT_LT(inelastic, 0.1);
-  EXPECT_GT(elastic, 3.0 * inelastic);
+  EXPECT_GT(elastic, 0.9);
+  EXPECT_LT(inelastic, 0.05);
 }
 
 TEST(Determinism, SameStateWithOneAndTwoThreads) {
