@@ -1,0 +1,214 @@
+#include "io/run.hpp"
+
+#include "io/output.hpp"
+#include "io/summary.hpp"
+
+#include <omp.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+namespace wake {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// "0:12", "12:34" or "1:02:03"; "--:--" when unknown.
+std::string formatDuration(double seconds) {
+  if (!std::isfinite(seconds) || seconds < 0) return "--:--";
+  const long s = std::lround(seconds);
+  char buf[32];
+  if (s >= 3600)
+    std::snprintf(buf, sizeof(buf), "%ld:%02ld:%02ld", s / 3600, (s / 60) % 60, s % 60);
+  else
+    std::snprintf(buf, sizeof(buf), "%ld:%02ld", s / 60, s % 60);
+  return buf;
+}
+
+/// Progress report: one updating line on a terminal, else at most one log line per
+/// second (and always the last frame); nothing when quiet.
+class Progress {
+ public:
+  Progress(const RunOptions& options, std::size_t last_frame, double end_time)
+      : out_(options.quiet ? nullptr
+             : options.log ? options.log
+                           : &std::cerr),
+        interactive_(options.interactive),
+        last_frame_(last_frame),
+        end_time_(end_time) {}
+
+  void message(const std::string& line) {
+    if (!out_) return;
+    if (interactive_ && line_width_ > 0) *out_ << "\r" << std::string(line_width_, ' ') << "\r";
+    line_width_ = 0;
+    *out_ << "[wake] " << line << std::endl;
+  }
+
+  void frame(std::size_t k, const Simulation& sim) {
+    if (!out_) return;
+    const double elapsed = secondsSince(start_);
+    const bool last = k == last_frame_;
+    if (!interactive_ && !last && k > 0 && elapsed - last_print_ < 1.0) return;
+    last_print_ = elapsed;
+    const double t = sim.time();
+    const double steps_per_second = elapsed > 0 ? sim.steps() / elapsed : 0.0;
+    const double eta = t > 0 ? elapsed * (end_time_ - t) / t : NAN;
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), "[wake] frame %zu/%zu  t=%.3f/%.3f s  %.0f steps/s  ETA %s", k,
+                  last_frame_, t, end_time_, steps_per_second, formatDuration(eta).c_str());
+    const std::string line = buf;
+    if (interactive_) {
+      // Pad over a longer previous line; the final newline comes with the last frame.
+      const std::size_t pad = line_width_ > line.size() ? line_width_ - line.size() : 0;
+      *out_ << "\r" << line << std::string(pad, ' ') << (last ? "\n" : "") << std::flush;
+      line_width_ = last ? 0 : line.size();
+    } else {
+      *out_ << line << std::endl;
+    }
+  }
+
+  /// Ends an unfinished updating line (before an error message is printed).
+  void abandon() {
+    if (out_ && interactive_ && line_width_ > 0) *out_ << std::endl;
+    line_width_ = 0;
+  }
+
+ private:
+  std::ostream* out_;
+  bool interactive_;
+  std::size_t last_frame_;
+  double end_time_;
+  Clock::time_point start_ = Clock::now();
+  double last_print_ = -1.0;
+  std::size_t line_width_ = 0;
+};
+
+bool allFinite(const std::vector<Vec3>& v) {
+  for (const Vec3& x : v)
+    if (!x.allFinite()) return false;
+  return true;
+}
+bool allFinite(const std::vector<double>& v) {
+  for (const double x : v)
+    if (!std::isfinite(x)) return false;
+  return true;
+}
+
+/// Stops the run when any fluid value is NaN or infinite, saying what to change.
+void checkHealth(const FluidSnapshot& fluid, const Simulation& sim, const SceneFile& scene,
+                 std::size_t frame, double previous_time, const std::string& partial_h5) {
+  if (fluidIsFinite(fluid)) return;
+  std::ostringstream m;
+  m << scene.path << ": the fluid became unstable (non-finite values) between t=" << previous_time
+    << " s and t=" << sim.time() << " s (frame " << frame << ", step " << sim.steps()
+    << "); lower time.cfl (now " << scene.sim.cfl << ") or time.max_dt (now " << scene.sim.max_dt
+    << " s), or raise fluid.speed_of_sound (now " << sim.fluid().params().speed_of_sound
+    << " m/s); the frames before are in " << partial_h5;
+  throw RunError(m.str());
+}
+
+/// Creates the output folder; an existing file of that name is bad input.
+void prepareOutputFolder(const std::string& dir) {
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+    throw SceneError("--out: " + dir + " exists and is not a folder");
+  fs::create_directories(dir, ec);
+  if (ec) throw SceneError("--out: cannot create the folder " + dir + ": " + ec.message());
+}
+
+}  // namespace
+
+bool fluidIsFinite(const FluidSnapshot& fluid) {
+  return allFinite(fluid.position) && allFinite(fluid.velocity) && allFinite(fluid.density) &&
+         allFinite(fluid.pressure);
+}
+
+RunResult runScene(const SceneFile& scene, const RunOptions& options) {
+  const Clock::time_point start = Clock::now();
+  if (options.out_dir.empty()) throw SceneError("--out: an output folder is required");
+
+  // Everything that can reject the input happens before the output folder is touched.
+  std::unique_ptr<Simulation> sim;
+  try {
+    sim = std::make_unique<Simulation>(scene.sim);
+  } catch (const std::invalid_argument& e) {
+    throw SceneError(scene.path + ": " + e.what());
+  } catch (const std::bad_alloc&) {
+    throw SceneError(scene.path + ": fluid.particle_radius: not enough memory for " +
+                     "this many particles; use a larger particle_radius or smaller blocks");
+  }
+  prepareOutputFolder(options.out_dir);
+
+  const std::size_t last_frame = frameCount(scene);
+  Progress progress(options, last_frame, scene.end_time);
+  const int threads = omp_get_max_threads();
+  {
+    std::ostringstream m;
+    m << "scene " << scene.name << ": " << sim->fluidParticles() << " fluid + "
+      << sim->boundaryParticles()
+      << " boundary particles, c = " << sim->fluid().params().speed_of_sound << " m/s, " << threads
+      << " thread" << (threads == 1 ? "" : "s") << ", " << last_frame + 1 << " frames";
+    if (sim->removedAtStart() > 0)
+      m << " (" << sim->removedAtStart() << " fluid particles inside bodies removed)";
+    progress.message(m.str());
+  }
+
+  FrameWriter writer(options.out_dir, scene, *sim);
+  FluidSnapshot fluid;
+  double previous_time = 0.0;
+  try {
+    for (std::size_t k = 0; k <= last_frame; ++k) {
+      if (k > 0) sim->advanceTo(frameTime(scene, k));
+      sim->snapshot(fluid);
+      checkHealth(fluid, *sim, scene, k, previous_time, writer.h5Path() + ".partial");
+      writer.writeFrame(*sim, fluid);
+      progress.frame(k, *sim);
+      previous_time = sim->time();
+    }
+    writer.finish();
+  } catch (const RunError&) {
+    progress.abandon();
+    throw;
+  } catch (const std::exception& e) {
+    progress.abandon();
+    std::ostringstream m;
+    m << scene.path << ": run stopped at t=" << sim->time() << " s (step " << sim->steps()
+      << "): " << e.what();
+    throw RunError(m.str());
+  }
+
+  RunStats stats;
+  stats.frames = writer.frames();
+  stats.threads = threads;
+  stats.output = fs::path(writer.h5Path()).filename().string();
+  stats.wall_seconds = secondsSince(start);
+
+  RunResult result;
+  result.summary = makeSummary(scene, *sim, stats);
+  result.h5_path = writer.h5Path();
+  result.xdmf_path = writer.xdmfPath();
+  result.summary_path = options.out_dir + "/summary.json";
+  try {
+    writeSummary(result.summary_path, result.summary);
+  } catch (const std::exception& e) {
+    throw RunError(e.what());
+  }
+  std::ostringstream m;
+  m << "done: " << stats.frames << " frames, " << sim->steps() << " steps in " << std::fixed
+    << std::setprecision(2) << stats.wall_seconds << " s -> " << result.h5_path;
+  progress.message(m.str());
+  return result;
+}
+
+}  // namespace wake

@@ -1,0 +1,350 @@
+// End to end through the `wake` binary: a small dam break is run into a temporary folder;
+// its HDF5 output is read back with the HDF5 C API and checked against the layout of
+// DESIGN.md §7, the summary against its contract fields; bad input must fail with one
+// error line and leave the earlier output byte for byte as it was.
+#include <gtest/gtest.h>
+#include <hdf5.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+const std::string kScene = std::string(WAKE_TEST_DATA_DIR) + "/scenes/small_dambreak.json";
+constexpr std::size_t kFrames = 6;  // round(end 0.05 s * 100 /s) + 1
+
+std::string readFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// A fresh folder under the system's temporary folder, removed at the end.
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    static int counter = 0;
+    path = fs::temp_directory_path() /
+           ("wake_io_test_" + std::to_string(getpid()) + "_" + std::to_string(counter++));
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+struct CliResult {
+  int status = -1;  ///< exit status of the wake binary
+  std::string out, err;
+};
+
+/// Runs the wake binary with `args` (already shell-quoted), capturing stdout and stderr.
+CliResult runWake(const std::string& args, const fs::path& scratch) {
+  const fs::path out = scratch / "stdout.txt", err = scratch / "stderr.txt";
+  const std::string command = std::string("\"") + WAKE_CLI_PATH + "\" " + args + " >\"" +
+                              out.string() + "\" 2>\"" + err.string() + "\"";
+  const int raw = std::system(command.c_str());
+  CliResult r;
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  r.out = readFile(out);
+  r.err = readFile(err);
+  fs::remove(out);
+  fs::remove(err);
+  return r;
+}
+
+std::size_t lineCount(const std::string& s) {
+  return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n'));
+}
+
+// --- HDF5 reading (C API) ----------------------------------------------------------------
+
+std::vector<hsize_t> datasetDims(hid_t location, const std::string& name) {
+  const hid_t set = H5Dopen2(location, name.c_str(), H5P_DEFAULT);
+  if (set < 0) return {};
+  const hid_t space = H5Dget_space(set);
+  std::vector<hsize_t> dims(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space)));
+  H5Sget_simple_extent_dims(space, dims.data(), nullptr);
+  H5Sclose(space);
+  H5Dclose(set);
+  return dims;
+}
+
+template <class T>
+std::vector<T> readDataset(hid_t location, const std::string& name, hid_t memory_type) {
+  std::size_t n = 1;
+  for (const hsize_t d : datasetDims(location, name))
+    n *= d;
+  std::vector<T> values(n);
+  const hid_t set = H5Dopen2(location, name.c_str(), H5P_DEFAULT);
+  if (n > 0) {
+    EXPECT_GE(H5Dread(set, memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0);
+  }
+  H5Dclose(set);
+  return values;
+}
+
+double readDoubleAttribute(hid_t object, const char* name) {
+  double value = NAN;
+  const hid_t attr = H5Aopen(object, name, H5P_DEFAULT);
+  EXPECT_GE(attr, 0) << name;
+  if (attr >= 0) {
+    H5Aread(attr, H5T_NATIVE_DOUBLE, &value);
+    H5Aclose(attr);
+  }
+  return value;
+}
+
+std::size_t linkCount(hid_t file, const char* group_name) {
+  const hid_t group = H5Gopen2(file, group_name, H5P_DEFAULT);
+  if (group < 0) return 0;
+  H5G_info_t info;
+  H5Gget_info(group, &info);
+  H5Gclose(group);
+  return static_cast<std::size_t>(info.nlinks);
+}
+
+// --- One run of the small scene, shared by the tests below -------------------------------
+
+class SmallDambreakRun : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir();
+    run_ = new CliResult(runWake(
+        "run \"" + kScene + "\" --out \"" + outDir().string() + "\" --threads 2", dir_->path));
+  }
+  static void TearDownTestSuite() {
+    delete run_;
+    delete dir_;
+  }
+  static fs::path outDir() { return dir_->path / "out"; }
+  static json summary() { return json::parse(readFile(outDir() / "summary.json")); }
+
+  static TempDir* dir_;
+  static CliResult* run_;
+};
+TempDir* SmallDambreakRun::dir_ = nullptr;
+CliResult* SmallDambreakRun::run_ = nullptr;
+
+TEST_F(SmallDambreakRun, ExitsZeroAndWritesTheOutputFiles) {
+  ASSERT_EQ(run_->status, 0) << run_->err;
+  EXPECT_TRUE(fs::is_regular_file(outDir() / "small_dambreak.h5"));
+  EXPECT_TRUE(fs::is_regular_file(outDir() / "small_dambreak.xdmf"));
+  EXPECT_TRUE(fs::is_regular_file(outDir() / "summary.json"));
+  // Nothing temporary is left behind.
+  for (const auto& entry : fs::directory_iterator(outDir()))
+    EXPECT_EQ(entry.path().string().find(".partial"), std::string::npos) << entry.path();
+  // Not a terminal: plain progress lines, the last one for the last frame.
+  EXPECT_NE(run_->err.find("frame 5/5"), std::string::npos) << run_->err;
+  EXPECT_EQ(run_->err.find('\r'), std::string::npos);
+}
+
+TEST_F(SmallDambreakRun, SummaryHasTheContractFields) {
+  ASSERT_EQ(run_->status, 0) << run_->err;
+  const json s = summary();
+  for (const char* field :
+       {"scene", "fluid_particles", "boundary_particles", "steps", "sim_time", "wall_seconds",
+        "max_density_ratio", "max_penetrating", "lost_particles", "bodies", "removed_at_start",
+        "speed_of_sound", "particle_radius", "frames", "threads", "timings", "mean_dt"})
+    EXPECT_TRUE(s.contains(field)) << field;
+  EXPECT_EQ(s["scene"], "small_dambreak");
+  EXPECT_GT(s["fluid_particles"].get<long>(), 0);
+  EXPECT_GT(s["boundary_particles"].get<long>(), 0);
+  EXPECT_GT(s["steps"].get<long>(), 0);
+  EXPECT_NEAR(s["sim_time"].get<double>(), 0.05, 1e-9);
+  EXPECT_GT(s["wall_seconds"].get<double>(), 0.0);
+  EXPECT_GT(s["max_density_ratio"].get<double>(), 0.5);
+  EXPECT_LT(s["max_density_ratio"].get<double>(), 2.0);
+  EXPECT_EQ(s["max_penetrating"], 0);
+  EXPECT_EQ(s["lost_particles"], 0);
+  EXPECT_GT(s["speed_of_sound"].get<double>(), 0.0);
+  EXPECT_EQ(s["particle_radius"], 0.01);
+  EXPECT_EQ(s["frames"], kFrames);
+  EXPECT_EQ(s["threads"], 2);
+  EXPECT_GT(s["mean_dt"].get<double>(), 0.0);
+  for (const char* part : {"neighbors", "density", "forces", "boundary", "integration"})
+    EXPECT_GE(s["timings"][part].get<double>(), 0.0) << part;
+  ASSERT_EQ(s["bodies"].size(), 1u);
+  const json& tank = s["bodies"][0];
+  EXPECT_EQ(tank["name"], "tank");
+  EXPECT_EQ(tank["orientation"], json({0.0, 0.0, 0.0, 1.0}));
+  EXPECT_EQ(tank["linear_velocity"], json({0.0, 0.0, 0.0}));
+  EXPECT_EQ(tank["angular_velocity"], json({0.0, 0.0, 0.0}));
+  EXPECT_EQ(tank["position"].size(), 3u);
+}
+
+TEST_F(SmallDambreakRun, Hdf5HasTheContractLayout) {
+  ASSERT_EQ(run_->status, 0) << run_->err;
+  const std::size_t n = summary()["fluid_particles"].get<std::size_t>();
+  const hid_t file = H5Fopen((outDir() / "small_dambreak.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  EXPECT_NEAR(readDoubleAttribute(file, "particle_radius"), 0.01, 0.0);
+  EXPECT_EQ(readDoubleAttribute(file, "rest_density"), 1000.0);
+  EXPECT_GT(readDoubleAttribute(file, "speed_of_sound"), 0.0);
+  EXPECT_GT(H5Aexists(file, "scene"), 0);
+
+  ASSERT_EQ(linkCount(file, "/frames"), kFrames);
+  for (std::size_t k = 0; k < kFrames; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "/frames/%06zu", k);
+    const hid_t frame = H5Gopen2(file, name, H5P_DEFAULT);
+    ASSERT_GE(frame, 0) << name;
+    EXPECT_NEAR(readDoubleAttribute(frame, "time"), 0.01 * static_cast<double>(k), 1e-12) << name;
+    EXPECT_EQ(datasetDims(frame, "position"), (std::vector<hsize_t>{n, 3})) << name;
+    EXPECT_EQ(datasetDims(frame, "velocity"), (std::vector<hsize_t>{n, 3})) << name;
+    EXPECT_EQ(datasetDims(frame, "density"), (std::vector<hsize_t>{n})) << name;
+    EXPECT_EQ(datasetDims(frame, "pressure"), (std::vector<hsize_t>{n})) << name;
+    const std::vector<std::uint32_t> id =
+        readDataset<std::uint32_t>(frame, "id", H5T_NATIVE_UINT32);
+    ASSERT_EQ(id.size(), n) << name;
+    EXPECT_TRUE(std::adjacent_find(id.begin(), id.end(), std::greater_equal<>()) == id.end())
+        << name << ": ids not strictly ascending";
+    for (const double x : readDataset<double>(frame, "position", H5T_NATIVE_DOUBLE))
+      ASSERT_TRUE(std::isfinite(x)) << name;
+    H5Gclose(frame);
+  }
+  // Frame 0 holds the initial block: all particles inside [0, 0.1] x [0, 0.2] x [0, 0.1].
+  const hid_t first = H5Gopen2(file, "/frames/000000", H5P_DEFAULT);
+  const std::vector<double> x = readDataset<double>(first, "position", H5T_NATIVE_DOUBLE);
+  for (std::size_t i = 0; i < x.size(); i += 3) {
+    EXPECT_GE(x[i], 0.0);
+    EXPECT_LE(x[i], 0.1);
+    EXPECT_LE(x[i + 1], 0.2);
+  }
+  H5Gclose(first);
+
+  const hid_t tank = H5Gopen2(file, "/bodies/tank", H5P_DEFAULT);
+  ASSERT_GE(tank, 0);
+  EXPECT_EQ(datasetDims(tank, "time"), (std::vector<hsize_t>{kFrames}));
+  EXPECT_EQ(datasetDims(tank, "position"), (std::vector<hsize_t>{kFrames, 3}));
+  EXPECT_EQ(datasetDims(tank, "orientation"), (std::vector<hsize_t>{kFrames, 4}));
+  EXPECT_EQ(datasetDims(tank, "linear_velocity"), (std::vector<hsize_t>{kFrames, 3}));
+  EXPECT_EQ(datasetDims(tank, "angular_velocity"), (std::vector<hsize_t>{kFrames, 3}));
+  const std::vector<double> times = readDataset<double>(tank, "time", H5T_NATIVE_DOUBLE);
+  EXPECT_NEAR(times.back(), 0.05, 1e-9);
+  const std::vector<double> q = readDataset<double>(tank, "orientation", H5T_NATIVE_DOUBLE);
+  EXPECT_EQ(q[3], 1.0);  // x, y, z, w: identity
+  H5Gclose(tank);
+  H5Fclose(file);
+}
+
+TEST_F(SmallDambreakRun, XdmfIndexesEveryFrameOfTheH5File) {
+  ASSERT_EQ(run_->status, 0) << run_->err;
+  const std::string x = readFile(outDir() / "small_dambreak.xdmf");
+  EXPECT_NE(x.find("small_dambreak.h5:/frames/000000/position"), std::string::npos);
+  EXPECT_EQ(x.find(".partial"), std::string::npos);
+  EXPECT_NE(x.find("CollectionType=\"Temporal\""), std::string::npos);
+  EXPECT_NE(x.find("Polyvertex"), std::string::npos);
+  std::size_t grids = 0;
+  for (auto at = x.find("<Time "); at != std::string::npos; at = x.find("<Time ", at + 1))
+    ++grids;
+  EXPECT_EQ(grids, kFrames);
+}
+
+TEST_F(SmallDambreakRun, BadInputFailsAndLeavesEarlierOutputUntouched) {
+  ASSERT_EQ(run_->status, 0) << run_->err;
+  std::map<fs::path, std::string> before;
+  for (const auto& entry : fs::directory_iterator(outDir()))
+    before[entry.path()] = readFile(entry.path());
+
+  // A scene naming the same output file, with a misspelt field and a bad slip.
+  const json good = json::parse(readFile(kScene));
+  struct Bad {
+    std::function<void(json&)> edit;
+    const char* field;
+  };
+  const Bad cases[] = {
+      {[](json& s) { s["fluid"]["partcle_radius"] = 0.01; }, "fluid.partcle_radius"},
+      {[](json& s) { s["bodies"][0]["slip"] = 1.5; }, "bodies[0].slip"},
+      {[](json& s) { s["fluid"]["particle_radius"] = 1e-6; }, "fluid.particle_radius"},
+  };
+  const fs::path scene = dir_->path / "bad.json";
+  for (const Bad& c : cases) {
+    json bad = good;
+    c.edit(bad);
+    std::ofstream(scene) << bad.dump(2);
+    const CliResult r =
+        runWake("run \"" + scene.string() + "\" --out \"" + outDir().string() + "\"", dir_->path);
+    EXPECT_EQ(r.status, 2) << c.field;
+    EXPECT_EQ(r.err.rfind("wake: error: ", 0), 0u) << r.err;
+    EXPECT_NE(r.err.find(c.field), std::string::npos) << r.err;
+    EXPECT_EQ(lineCount(r.err), 1u) << r.err;
+  }
+
+  std::map<fs::path, std::string> after;
+  for (const auto& entry : fs::directory_iterator(outDir()))
+    after[entry.path()] = readFile(entry.path());
+  EXPECT_TRUE(before == after) << "earlier output changed";
+}
+
+// --- Command line without a run -----------------------------------------------------------
+
+TEST(WakeCli, HelpAndVersion) {
+  const TempDir dir;
+  CliResult r = runWake("--help", dir.path);
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.out.find("run"), std::string::npos) << r.out;
+  r = runWake("run --help", dir.path);
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.out.find("--out"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("--threads"), std::string::npos) << r.out;
+  r = runWake("--version", dir.path);
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.out.find("wake "), std::string::npos) << r.out;
+}
+
+TEST(WakeCli, BadCommandLinesExitTwoWithOneLine) {
+  const TempDir dir;
+  const std::string out = " --out \"" + (dir.path / "out").string() + "\"";
+  const struct {
+    std::string args;
+    const char* says;
+  } cases[] = {
+      {"", "subcommand"},
+      {"run \"" + kScene + "\"", "--out"},
+      {"run \"" + kScene + "\"" + out + " --threads 0", "--threads"},
+      {"run \"" + kScene + "\"" + out + " --end -1", "--end"},
+      {"run \"" + kScene + "\"" + out + " --end nan", "--end"},
+      {"run no_such_scene.json" + out, "no_such_scene.json"},
+      {"frobnicate", "frobnicate"},
+  };
+  for (const auto& c : cases) {
+    const CliResult r = runWake(c.args, dir.path);
+    EXPECT_EQ(r.status, 2) << c.args << "\n" << r.err;
+    EXPECT_EQ(r.err.rfind("wake: error: ", 0), 0u) << c.args << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << c.args << "\n" << r.err;
+    EXPECT_EQ(lineCount(r.err), 1u) << c.args << "\n" << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir.path / "out")) << "bad input created the output folder";
+}
+
+TEST(WakeCli, EndOverrideAndQuiet) {
+  const TempDir dir;
+  const CliResult r = runWake(
+      "run \"" + kScene + "\" --out \"" + dir.path.string() + "\" --end 0.02 --quiet", dir.path);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_EQ(r.out, "");
+  const json s = json::parse(readFile(dir.path / "summary.json"));
+  EXPECT_NEAR(s["sim_time"].get<double>(), 0.02, 1e-9);
+  EXPECT_EQ(s["frames"], 3);
+}
+
+}  // namespace
