@@ -42,14 +42,19 @@ Options parse(int argc, char** argv) {
       if (i + 1 >= argc) usage((std::string(name) + " needs a value").c_str());
       return argv[++i];
     };
-    if (!std::strcmp(argv[i], "--particles")) o.particles = std::stol(value("--particles"));
-    else if (!std::strcmp(argv[i], "--steps")) o.steps = std::stoi(value("--steps"));
-    else if (!std::strcmp(argv[i], "--warmup")) o.warmup = std::stoi(value("--warmup"));
+    if (!std::strcmp(argv[i], "--particles"))
+      o.particles = std::stol(value("--particles"));
+    else if (!std::strcmp(argv[i], "--steps"))
+      o.steps = std::stoi(value("--steps"));
+    else if (!std::strcmp(argv[i], "--warmup"))
+      o.warmup = std::stoi(value("--warmup"));
     else if (!std::strcmp(argv[i], "--threads")) {
       o.threads.clear();
       std::stringstream ss(value("--threads"));
-      for (std::string t; std::getline(ss, t, ',');) o.threads.push_back(std::stoi(t));
-    } else usage((std::string("unknown option ") + argv[i]).c_str());
+      for (std::string t; std::getline(ss, t, ',');)
+        o.threads.push_back(std::stoi(t));
+    } else
+      usage((std::string("unknown option ") + argv[i]).c_str());
   }
   if (o.particles < 1 || o.steps < 1 || o.warmup < 0 || o.threads.empty())
     usage("counts must be positive");
@@ -77,7 +82,8 @@ std::uint64_t stateHash(const Simulation& sim) {
   std::uint64_t h = 1469598103934665603ull;  // FNV-1a
   auto mix = [&](const void* data, std::size_t bytes) {
     const unsigned char* p = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 1099511628211ull;
+    for (std::size_t i = 0; i < bytes; ++i)
+      h = (h ^ p[i]) * 1099511628211ull;
   };
   mix(snap.position.data(), snap.position.size() * sizeof(Vec3));
   mix(snap.velocity.data(), snap.velocity.size() * sizeof(Vec3));
@@ -90,17 +96,19 @@ int main(int argc, char** argv) {
   const Options opt = parse(argc, argv);
   std::printf("# Wake dam-break benchmark: %ld requested particles, %d warm-up + %d timed steps\n",
               opt.particles, opt.warmup, opt.steps);
-  std::printf("%7s %9s %9s %6s %10s %11s %8s %8s %8s %8s %8s %9s %18s\n", "threads",
-              "fluid", "boundary", "steps", "s/step", "ns/p/step", "nbr%", "dens%", "force%",
-              "bound%", "integ%", "sim_t[s]", "state_hash");
+  std::printf("%7s %9s %9s %6s %10s %11s %8s %8s %8s %8s %8s %9s %18s\n", "threads", "fluid",
+              "boundary", "steps", "s/step", "ns/p/step", "nbr%", "dens%", "force%", "bound%",
+              "integ%", "sim_t[s]", "state_hash");
   double single = 0.0;
   for (int threads : opt.threads) {
     omp_set_num_threads(threads);
     Simulation sim(damBreak(opt.particles));
-    for (int i = 0; i < opt.warmup; ++i) sim.step(1e9);
+    for (int i = 0; i < opt.warmup; ++i)
+      sim.step(1e9);
     const StepTimings before = sim.timings();
     const auto t0 = std::chrono::steady_clock::now();
-    for (int i = 0; i < opt.steps; ++i) sim.step(1e9);
+    for (int i = 0; i < opt.steps; ++i)
+      sim.step(1e9);
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     StepTimings t = sim.timings();
@@ -117,7 +125,8 @@ int main(int argc, char** argv) {
                 100 * t.neighbors / total, 100 * t.density / total, 100 * t.forces / total,
                 100 * t.boundary / total, 100 * t.integration / total, sim.time(),
                 static_cast<unsigned long long>(stateHash(sim)));
-    if (threads == 1) single = per_step;
+    if (threads == 1)
+      single = per_step;
     else if (single > 0)
       std::printf("# speed-up on %d threads: %.2fx\n", threads, single / per_step);
   }

@@ -6,9 +6,13 @@
 
 namespace wake::bullet {
 
-int version() { return btGetVersion(); }
+int version() {
+  return btGetVersion();
+}
 
-bool doublePrecision() { return sizeof(btScalar) == sizeof(double); }
+bool doublePrecision() {
+  return sizeof(btScalar) == sizeof(double);
+}
 
 double freeFallDrop(double seconds, double dt) {
   // Owned in dependency order: destroyed in reverse.
@@ -27,7 +31,8 @@ double freeFallDrop(double seconds, double dt) {
   world->addRigidBody(body.get());
   const double y0 = body->getWorldTransform().getOrigin().y();
   const int steps = static_cast<int>(seconds / dt + 0.5);
-  for (int i = 0; i < steps; ++i) world->stepSimulation(btScalar(dt), 0);
+  for (int i = 0; i < steps; ++i)
+    world->stepSimulation(btScalar(dt), 0);
   const double y1 = body->getWorldTransform().getOrigin().y();
   world->removeRigidBody(body.get());
   return y1 - y0;

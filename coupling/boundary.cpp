@@ -16,7 +16,8 @@ double flatLatticeKernelSum(const CubicSplineKernel& kernel, double s) {
   const int reach = static_cast<int>(std::ceil(kernel.supportRadius() / s)) + 1;
   double sum = 0.0;
   for (int i = -reach; i <= reach; ++i)
-    for (int j = -reach; j <= reach; ++j) sum += kernel.value(s * std::hypot(i, j));
+    for (int j = -reach; j <= reach; ++j)
+      sum += kernel.value(s * std::hypot(i, j));
   return sum;
 }
 
@@ -158,8 +159,7 @@ void Boundaries::addDensity(const Fluid& fluid, std::vector<double>& density) co
   }
 }
 
-std::size_t Boundaries::findContacts(const Vec3& x,
-                                     std::array<Contact, kMaxContacts>& out) const {
+std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxContacts>& out) const {
   if (position_.empty() || !near(x, kNearContact)) return 0;
   const double reach = radius_ + radius_;  // r_f + r_b
   const double reach_sq = reach * reach;
@@ -170,7 +170,8 @@ std::size_t Boundaries::findContacts(const Vec3& x,
       if (d_sq >= reach_sq) continue;
       const std::uint32_t body = body_of_[k];
       std::size_t c = 0;
-      while (c < count && out[c].body != body) ++c;
+      while (c < count && out[c].body != body)
+        ++c;
       if (c < count) {
         // Ties go to the lower sample index, so the result is independent of visit order.
         if (d_sq < out[c].dist_sq || (d_sq == out[c].dist_sq && k < out[c].sample))
@@ -194,8 +195,7 @@ std::size_t Boundaries::findContacts(const Vec3& x,
 }
 
 std::size_t Boundaries::controlVelocities(const std::vector<Vec3>& x_pred,
-                                          const std::vector<Vec3>& v_old,
-                                          std::vector<Vec3>& v,
+                                          const std::vector<Vec3>& v_old, std::vector<Vec3>& v,
                                           std::vector<std::uint8_t>& in_contact_flag) const {
   const std::int64_t n = static_cast<std::int64_t>(x_pred.size());
   in_contact_flag.assign(x_pred.size(), 0);

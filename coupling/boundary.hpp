@@ -23,12 +23,12 @@ enum class BodyKind { Static, Kinematic, Dynamic };
 struct BodySettings {
   std::string name;
   BodyKind kind = BodyKind::Static;
-  std::shared_ptr<const Shape> shape;  ///< exact shape, body space
-  Pose pose;                           ///< body -> world; position = centre of mass
+  std::shared_ptr<const Shape> shape;    ///< exact shape, body space
+  Pose pose;                             ///< body -> world; position = centre of mass
   Vec3 linear_velocity = Vec3::Zero();   ///< m/s, world
   Vec3 angular_velocity = Vec3::Zero();  ///< rad/s, world
-  double slip = 0.0;                   ///< eps in [0, 1]: 0 no-slip, 1 free slip
-  double restitution = 0.0;            ///< delta in [0, 1]: 0 inelastic
+  double slip = 0.0;                     ///< eps in [0, 1]: 0 no-slip, 1 free slip
+  double restitution = 0.0;              ///< delta in [0, 1]: 0 inelastic
 };
 
 /// Contact of one fluid particle with one body: the body's nearest overlapping sample.
@@ -96,8 +96,8 @@ class Boundaries {
  private:
   struct Body {
     BodySettings settings;
-    SurfaceSamples local;  ///< body-space samples
-    Aabb world_bounds;     ///< bounds of the exact shape in world space (clipped)
+    SurfaceSamples local;     ///< body-space samples
+    Aabb world_bounds;        ///< bounds of the exact shape in world space (clipped)
     std::uint32_t first = 0;  ///< first of its samples in the unsorted world arrays
   };
   /// Bit 1: a sample within the kernel support may exist; bit 2: within contact reach.
@@ -118,9 +118,9 @@ class Boundaries {
   std::vector<Vec3> position_, normal_;
   std::vector<double> volume_;
   std::vector<std::uint32_t> body_of_;
-  int density_reach_ = 1;  ///< cells to search for the kernel support
-  int contact_reach_ = 1;  ///< cells to search for contacts (r_f + r_b)
-  std::vector<std::uint8_t> near_;  ///< (cells) kNear* bits: samples within reach
+  int density_reach_ = 1;             ///< cells to search for the kernel support
+  int contact_reach_ = 1;             ///< cells to search for contacts (r_f + r_b)
+  std::vector<std::uint8_t> near_;    ///< (cells) kNear* bits: samples within reach
   std::vector<std::uint32_t> order_;  ///< scratch
 };
 

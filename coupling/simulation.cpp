@@ -18,7 +18,9 @@ double secondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-bool finite(const Vec3& v) { return v.allFinite(); }
+bool finite(const Vec3& v) {
+  return v.allFinite();
+}
 
 void require(bool ok, const std::string& field, const std::string& what) {
   if (!ok) throw std::invalid_argument(field + ": " + what);
@@ -51,8 +53,7 @@ void validate(const SimulationSettings& s) {
   require(finite(s.gravity), "gravity", "must be finite");
   require(std::isfinite(f.particle_radius) && f.particle_radius > 0, "fluid.particle_radius",
           "must be > 0");
-  require(std::isfinite(f.rest_density) && f.rest_density > 0, "fluid.rest_density",
-          "must be > 0");
+  require(std::isfinite(f.rest_density) && f.rest_density > 0, "fluid.rest_density", "must be > 0");
   require(std::isfinite(f.speed_of_sound) && f.speed_of_sound >= 0, "fluid.speed_of_sound",
           "must be > 0 or auto");
   require(std::isfinite(f.viscosity) && f.viscosity >= 0, "fluid.viscosity", "must be >= 0");
@@ -75,8 +76,7 @@ void validate(const SimulationSettings& s) {
     require(b.kind == BodyKind::Static, field + ".kind",
             "only static bodies are supported by this simulation");
     require(b.slip >= 0 && b.slip <= 1, field + ".slip", "must be in [0, 1]");
-    require(b.restitution >= 0 && b.restitution <= 1, field + ".restitution",
-            "must be in [0, 1]");
+    require(b.restitution >= 0 && b.restitution <= 1, field + ".restitution", "must be in [0, 1]");
     require(finite(b.pose.position) && b.pose.orientation.coeffs().allFinite(), field + ".position",
             "must be finite");
   }
@@ -100,7 +100,8 @@ double autoSpeedOfSound(const SimulationSettings& s) {
     }
     v_max = std::max(v_max, b.velocity.norm());
   }
-  for (const BodySettings& b : s.bodies) v_max = std::max(v_max, b.linear_velocity.norm());
+  for (const BodySettings& b : s.bodies)
+    v_max = std::max(v_max, b.linear_velocity.norm());
   const Aabb box = sceneBounds(s);
   double bottom = fluid_top;
   if (!box.empty()) {
@@ -137,7 +138,8 @@ Simulation::Simulation(SimulationSettings settings) : settings_(std::move(settin
 
   fluid_ = std::make_unique<Fluid>(s.fluid, s.domain);
   boundaries_ = std::make_unique<Boundaries>(s.fluid, s.domain);
-  for (const BodySettings& b : s.bodies) boundaries_->addBody(b);
+  for (const BodySettings& b : s.bodies)
+    boundaries_->addBody(b);
   boundaries_->updateWorld();
 
   // Fill the blocks on the lattice; drop particles outside the domain, inside a body, or
@@ -167,7 +169,9 @@ Simulation::Simulation(SimulationSettings settings) : settings_(std::move(settin
 
 Simulation::~Simulation() = default;
 
-std::size_t Simulation::boundaryParticles() const { return boundaries_->sampleCount(); }
+std::size_t Simulation::boundaryParticles() const {
+  return boundaries_->sampleCount();
+}
 
 std::size_t Simulation::countPenetrating() const {
   return boundaries_->countInside(fluid_->state().position);
@@ -249,7 +253,8 @@ double Simulation::step(double t_limit) {
 
   t0 = Clock::now();
 #pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < n; ++i) st.position[i] += dt * st.velocity[i];
+  for (std::int64_t i = 0; i < n; ++i)
+    st.position[i] += dt * st.velocity[i];
   timings_.integration += secondsSince(t0);
 
   // Position correction against the bodies' final poses (static here).
@@ -264,21 +269,24 @@ double Simulation::step(double t_limit) {
   // Health: density ratio and penetration against the exact shapes.
   double rho_max = 0.0;
 #pragma omp parallel for reduction(max : rho_max) schedule(static)
-  for (std::int64_t i = 0; i < n; ++i) rho_max = std::max(rho_max, st.density[i]);
+  for (std::int64_t i = 0; i < n; ++i)
+    rho_max = std::max(rho_max, st.density[i]);
   max_density_ratio_ = std::max(max_density_ratio_, rho_max / settings_.fluid.rest_density);
   max_penetrating_ = std::max(max_penetrating_, countPenetrating());
   return dt;
 }
 
 void Simulation::advanceTo(double t) {
-  while (time_ < t) step(t);
+  while (time_ < t)
+    step(t);
 }
 
 void Simulation::snapshot(FluidSnapshot& out) const {
   const FluidState& st = fluid_->state();
   const std::size_t n = st.size();
   std::vector<std::uint32_t> order(n);
-  for (std::size_t i = 0; i < n; ++i) order[i] = static_cast<std::uint32_t>(i);
+  for (std::size_t i = 0; i < n; ++i)
+    order[i] = static_cast<std::uint32_t>(i);
   std::sort(order.begin(), order.end(),
             [&](std::uint32_t a, std::uint32_t b) { return st.id[a] < st.id[b]; });
   out.id.resize(n);

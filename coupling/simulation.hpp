@@ -25,13 +25,13 @@ enum class CouplingMethod { Local, Global, Penalty };
 
 struct SimulationSettings {
   Vec3 gravity = Vec3(0, -9.81, 0);  ///< m/s^2
-  FluidParams fluid;                  ///< speed_of_sound <= 0 means "auto"
+  FluidParams fluid;                 ///< speed_of_sound <= 0 means "auto"
   std::vector<FluidBlock> blocks;
   std::vector<BodySettings> bodies;
   CouplingMethod method = CouplingMethod::Local;
-  double cfl = 0.4;         ///< lambda of the CFL condition, in (0, 1]
-  double max_dt = 1e-3;     ///< s, upper bound of the time step, > 0
-  Aabb domain;              ///< m; particles leaving it are lost; empty = automatic
+  double cfl = 0.4;      ///< lambda of the CFL condition, in (0, 1]
+  double max_dt = 1e-3;  ///< s, upper bound of the time step, > 0
+  Aabb domain;           ///< m; particles leaving it are lost; empty = automatic
 };
 
 /// One fluid frame, in permanent particle order (id ascending).
@@ -104,8 +104,8 @@ class Simulation {
   std::size_t removed_at_start_ = 0, lost_ = 0, max_penetrating_ = 0;
   double max_density_ratio_ = 0;
   StepTimings timings_;
-  std::vector<Vec3> x_old_;      // scratch: positions at the start of the step
-  std::vector<Vec3> v_old_;      // scratch: velocities at the start of the step
+  std::vector<Vec3> x_old_;          // scratch: positions at the start of the step
+  std::vector<Vec3> v_old_;          // scratch: velocities at the start of the step
   std::vector<std::uint8_t> flags_;  // scratch
 };
 

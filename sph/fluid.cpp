@@ -15,7 +15,8 @@ void gather(const std::vector<T>& src, const std::vector<std::uint32_t>& order,
   dst.resize(order.size());
   const std::int64_t n = static_cast<std::int64_t>(order.size());
 #pragma omp parallel for schedule(static)
-  for (std::int64_t k = 0; k < n; ++k) dst[k] = src[order[k]];
+  for (std::int64_t k = 0; k < n; ++k)
+    dst[k] = src[order[k]];
 }
 
 template <class T>
@@ -180,7 +181,8 @@ double Fluid::maxSpeed() const {
   double m = 0.0;
   const std::int64_t n = static_cast<std::int64_t>(state_.size());
 #pragma omp parallel for reduction(max : m) schedule(static)
-  for (std::int64_t i = 0; i < n; ++i) m = std::max(m, state_.velocity[i].squaredNorm());
+  for (std::int64_t i = 0; i < n; ++i)
+    m = std::max(m, state_.velocity[i].squaredNorm());
   return std::sqrt(m);
 }
 
@@ -188,7 +190,8 @@ double Fluid::maxAcceleration() const {
   double m = 0.0;
   const std::int64_t n = static_cast<std::int64_t>(state_.size());
 #pragma omp parallel for reduction(max : m) schedule(static)
-  for (std::int64_t i = 0; i < n; ++i) m = std::max(m, state_.acceleration[i].squaredNorm());
+  for (std::int64_t i = 0; i < n; ++i)
+    m = std::max(m, state_.acceleration[i].squaredNorm());
   return std::sqrt(m);
 }
 

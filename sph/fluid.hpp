@@ -15,18 +15,21 @@ namespace wake {
 
 /// Constant parameters of the fluid.
 struct FluidParams {
-  double particle_radius = 0.01;   ///< m, > 0; lattice spacing is 2 * particle_radius
-  double rest_density = 1000.0;    ///< kg/m^3, > 0
-  double speed_of_sound = 0.0;     ///< m/s, > 0 (the scene's "auto" is resolved before)
-  double viscosity = 0.1;          ///< Monaghan's alpha, dimensionless, >= 0
-  double gamma = 7.0;              ///< Tait exponent, > 0
-  double smoothing_ratio = 1.0;    ///< smoothing length H / spacing, in [0.8, 2]
+  double particle_radius = 0.01;  ///< m, > 0; lattice spacing is 2 * particle_radius
+  double rest_density = 1000.0;   ///< kg/m^3, > 0
+  double speed_of_sound = 0.0;    ///< m/s, > 0 (the scene's "auto" is resolved before)
+  double viscosity = 0.1;         ///< Monaghan's alpha, dimensionless, >= 0
+  double gamma = 7.0;             ///< Tait exponent, > 0
+  double smoothing_ratio = 1.0;   ///< smoothing length H / spacing, in [0.8, 2]
 
   double spacing() const { return 2.0 * particle_radius; }
   double smoothingLength() const { return smoothing_ratio * spacing(); }
   double supportRadius() const { return 2.0 * smoothingLength(); }
   /// Mass of one particle (kg): rest density times the lattice cell volume.
-  double particleMass() const { double s = spacing(); return rest_density * s * s * s; }
+  double particleMass() const {
+    double s = spacing();
+    return rest_density * s * s * s;
+  }
 };
 
 /// Changing state of the fluid: structure of arrays, all of length size(), kept in
@@ -88,7 +91,7 @@ class Fluid {
   FluidState state_;
   FluidState scratch_;
   NeighborList neighbors_;
-  std::vector<std::uint32_t> order_;  ///< (n) scratch: cell-sort permutation
+  std::vector<std::uint32_t> order_;   ///< (n) scratch: cell-sort permutation
   std::vector<double> p_over_rho_sq_;  ///< (n) P / rho^2 (m^5 / (kg s^2)), this step
 };
 

@@ -12,7 +12,8 @@ namespace wake {
 
 double UniformGrid::cellsFor(const Aabb& box, double cell_size) {
   double cells = 1.0;
-  for (int k = 0; k < 3; ++k) cells *= std::max(1.0, std::ceil((box.max[k] - box.min[k]) / cell_size));
+  for (int k = 0; k < 3; ++k)
+    cells *= std::max(1.0, std::ceil((box.max[k] - box.min[k]) / cell_size));
   return cells;
 }
 
@@ -46,13 +47,18 @@ void UniformGrid::sort(const std::vector<Vec3>& points, std::vector<std::uint32_
   std::fill(cell_start_.begin(), cell_start_.end(), 0u);
   const std::int64_t sn = static_cast<std::int64_t>(n);
 #pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < sn; ++i) cell_of_[i] = cellIndex(points[i]);
+  for (std::int64_t i = 0; i < sn; ++i)
+    cell_of_[i] = cellIndex(points[i]);
   // Histogram shifted by one, prefix sum gives the start of each cell.
-  for (std::size_t i = 0; i < n; ++i) ++cell_start_[cell_of_[i] + 1];
-  for (std::size_t c = 1; c < cell_start_.size(); ++c) cell_start_[c] += cell_start_[c - 1];
+  for (std::size_t i = 0; i < n; ++i)
+    ++cell_start_[cell_of_[i] + 1];
+  for (std::size_t c = 1; c < cell_start_.size(); ++c)
+    cell_start_[c] += cell_start_[c - 1];
   // Scatter; cell_start_[c] is used as the running cursor of cell c, then restored.
-  for (std::size_t i = 0; i < n; ++i) order[cell_start_[cell_of_[i]]++] = static_cast<std::uint32_t>(i);
-  for (std::size_t c = cell_start_.size() - 1; c > 0; --c) cell_start_[c] = cell_start_[c - 1];
+  for (std::size_t i = 0; i < n; ++i)
+    order[cell_start_[cell_of_[i]]++] = static_cast<std::uint32_t>(i);
+  for (std::size_t c = cell_start_.size() - 1; c > 0; --c)
+    cell_start_[c] = cell_start_[c - 1];
   cell_start_[0] = 0;
 }
 
@@ -94,8 +100,10 @@ void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points,
 #pragma omp barrier
 #pragma omp single
     {
-      for (std::size_t i = 0; i < n; ++i) out.offset[i + 1] += out.offset[i];
-      for (std::size_t k = 0; k < nt; ++k) chunk_size[k + 1] += chunk_size[k];
+      for (std::size_t i = 0; i < n; ++i)
+        out.offset[i + 1] += out.offset[i];
+      for (std::size_t k = 0; k < nt; ++k)
+        chunk_size[k + 1] += chunk_size[k];
       out.index.resize(out.offset[n]);
     }
     if (used > 0)

@@ -34,7 +34,7 @@ struct Aabb {
 
 /// Rigid transform body -> world: x_world = orientation * x_body + position.
 struct Pose {
-  Vec3 position = Vec3::Zero();        ///< m
+  Vec3 position = Vec3::Zero();         ///< m
   Quat orientation = Quat::Identity();  ///< unit quaternion
 
   Vec3 toWorld(const Vec3& p) const { return orientation * p + position; }

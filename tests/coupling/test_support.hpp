@@ -29,8 +29,7 @@ inline SimulationSettings tankScene(const Vec3& tank_size, const FluidBlock& blo
   SimulationSettings s;
   s.fluid.particle_radius = particle_radius;
   s.blocks.push_back(block);
-  s.bodies.push_back(staticBody(
-      "tank", makeTank(Vec3::Zero(), tank_size, 4.0 * particle_radius)));
+  s.bodies.push_back(staticBody("tank", makeTank(Vec3::Zero(), tank_size, 4.0 * particle_radius)));
   return s;
 }
 
@@ -40,11 +39,13 @@ inline void runWithoutPenetration(Simulation& sim, double t) {
   while (sim.time() < t) {
     sim.step(t);
     const std::size_t inside = sim.countPenetrating();
-    ASSERT_EQ(inside, 0u) << "fluid inside a body at t = " << sim.time() << " (step "
-                          << sim.steps() << ")";
+    ASSERT_EQ(inside, 0u) << "fluid inside a body at t = " << sim.time() << " (step " << sim.steps()
+                          << ")";
   }
 }
 
-inline double maxSpeed(const Simulation& sim) { return sim.fluid().maxSpeed(); }
+inline double maxSpeed(const Simulation& sim) {
+  return sim.fluid().maxSpeed();
+}
 
 }  // namespace wake::test

@@ -19,13 +19,15 @@ namespace {
 
 Vec3 centroid(const FluidState& st) {
   Vec3 c = Vec3::Zero();
-  for (const Vec3& x : st.position) c += x;
+  for (const Vec3& x : st.position)
+    c += x;
   return c / double(st.size());
 }
 
 Vec3 meanVelocity(const FluidState& st) {
   Vec3 c = Vec3::Zero();
-  for (const Vec3& v : st.velocity) c += v;
+  for (const Vec3& v : st.velocity)
+    c += v;
   return c / double(st.size());
 }
 
@@ -44,17 +46,20 @@ TEST(Hydrostatic, PressureGrowsLinearlyWithDepthAndFluidRests) {
   const double g = 9.81, rho0 = 1000.0;
   const double v_fall = std::sqrt(2 * g * height);
   double v_sq = 0;
-  for (const Vec3& v : sim.fluid().state().velocity) v_sq += v.squaredNorm();
+  for (const Vec3& v : sim.fluid().state().velocity)
+    v_sq += v.squaredNorm();
   const double v_rms = std::sqrt(v_sq / double(sim.fluidParticles()));
-  std::printf("[ hydrostatic ] after %.1f s: rms speed %.4f m/s, max %.4f m/s (free fall %.2f m/s)\n",
-              sim.time(), v_rms, sim.fluid().maxSpeed(), v_fall);
+  std::printf(
+      "[ hydrostatic ] after %.1f s: rms speed %.4f m/s, max %.4f m/s (free fall %.2f m/s)\n",
+      sim.time(), v_rms, sim.fluid().maxSpeed(), v_fall);
   EXPECT_LT(v_rms, 0.01 * v_fall);
   EXPECT_LT(sim.fluid().maxSpeed(), 0.05 * v_fall);
 
   // Free surface: top of the highest particles.
   const FluidState& st = sim.fluid().state();
   double top = 0;
-  for (const Vec3& x : st.position) top = std::max(top, x.y() + r);
+  for (const Vec3& x : st.position)
+    top = std::max(top, x.y() + r);
   // Layer averages of pressure, away from the walls (3 spacings) and the surface.
   std::map<int, std::pair<double, int>> layers;
   for (std::size_t i = 0; i < st.size(); ++i) {
@@ -70,8 +75,9 @@ TEST(Hydrostatic, PressureGrowsLinearlyWithDepthAndFluidRests) {
     const double depth = top - y;
     if (depth < 0.08 || y < 0.03) continue;  // away from surface and floor
     const double error = acc.first / acc.second;
-    std::printf("[ hydrostatic ] depth %.3f m: rho g h = %8.1f Pa, p - rho g h = %7.1f Pa (%+.1f%%)\n",
-                depth, rho0 * g * depth, error, 100.0 * error / (rho0 * g * depth));
+    std::printf(
+        "[ hydrostatic ] depth %.3f m: rho g h = %8.1f Pa, p - rho g h = %7.1f Pa (%+.1f%%)\n",
+        depth, rho0 * g * depth, error, 100.0 * error / (rho0 * g * depth));
     EXPECT_LT(std::abs(error), 0.05 * rho0 * g * depth)
         << "depth " << depth << ": p - rho g h = " << error << " Pa";
     ++checked;
@@ -116,7 +122,8 @@ double slideDistance(double slip, double t) {
   ramp.orientation = Quat(Eigen::AngleAxisd(-25.0 * M_PI / 180.0, Vec3::UnitZ()));
   s.bodies.push_back(staticBody("ramp", makeBox(Vec3(0.5, 0.02, 0.08)), slip, 0.0, ramp));
   const Vec3 start = ramp.toWorld(Vec3(-0.38, 0.02, 0.0));
-  s.blocks.push_back({start + Vec3(0, 0.012, -0.03), start + Vec3(0.06, 0.042, 0.03), Vec3::Zero()});
+  s.blocks.push_back(
+      {start + Vec3(0, 0.012, -0.03), start + Vec3(0.06, 0.042, 0.03), Vec3::Zero()});
   s.domain = Aabb{Vec3(-0.6, -0.5, -0.2), Vec3(0.6, 0.5, 0.2)};
   Simulation sim(s);
   const Vec3 c0 = centroid(sim.fluid().state());
@@ -131,8 +138,8 @@ TEST(Slip, FreeSlipSlidesFurtherThanNoSlip) {
   const double t = 0.3;
   const double free_slip = slideDistance(1.0, t);
   const double no_slip = slideDistance(0.0, t);
-  std::printf("[ slip ] downhill distance after %.2f s: eps=1 %.4f m, eps=0 %.4f m\n", t,
-              free_slip, no_slip);
+  std::printf("[ slip ] downhill distance after %.2f s: eps=1 %.4f m, eps=0 %.4f m\n", t, free_slip,
+              no_slip);
   // Frictionless sliding: a = g sin(25 deg) once on the ramp.
   EXPECT_GT(free_slip, 1.3 * no_slip);
   EXPECT_GT(free_slip, 0.05);
@@ -168,8 +175,8 @@ TEST(Restitution, SingleParticleBouncesOnlyWithRestitution) {
   const FluidBlock drop{Vec3(-0.005, 0.05, -0.005), Vec3(0.005, 0.06, 0.005), Vec3::Zero()};
   const double elastic = reboundRatio(1.0, drop, 0.2);
   const double inelastic = reboundRatio(0.0, drop, 0.2);
-  std::printf("[ restitution ] one particle: rebound/impact delta=1 %.3f, delta=0 %.3f\n",
-              elastic, inelastic);
+  std::printf("[ restitution ] one particle: rebound/impact delta=1 %.3f, delta=0 %.3f\n", elastic,
+              inelastic);
   EXPECT_GT(elastic, 0.9);
   EXPECT_LT(inelastic, 0.05);
 }
@@ -193,7 +200,8 @@ TEST(Determinism, SameStateWithOneAndTwoThreads) {
     SimulationSettings s =
         tankScene(Vec3(0.3, 0.3, 0.05), {Vec3::Zero(), Vec3(0.1, 0.2, 0.05), Vec3::Zero()}, 0.005);
     Simulation sim(s);
-    for (int i = 0; i < 200; ++i) sim.step(1.0);
+    for (int i = 0; i < 200; ++i)
+      sim.step(1.0);
     FluidSnapshot snap;
     sim.snapshot(snap);
     return std::make_pair(sim.time(), snap.position);
@@ -202,5 +210,6 @@ TEST(Determinism, SameStateWithOneAndTwoThreads) {
   const auto two = run(2);
   EXPECT_EQ(one.first, two.first);
   ASSERT_EQ(one.second.size(), two.second.size());
-  for (std::size_t i = 0; i < one.second.size(); ++i) ASSERT_EQ(one.second[i], two.second[i]);
+  for (std::size_t i = 0; i < one.second.size(); ++i)
+    ASSERT_EQ(one.second[i], two.second[i]);
 }

@@ -73,7 +73,8 @@ TEST(Density, FreeSurfaceIsNotDenserAndPressureIsNotNegative) {
   EXPECT_LE(st.density[corner], 1000.0 * (1 + 1e-12));
   EXPECT_LE(st.density[face], 1000.0 * (1 + 1e-12));
   EXPECT_LT(st.density[corner], st.density[face]);
-  for (std::size_t i = 0; i < st.size(); ++i) EXPECT_GE(st.pressure[i], 0.0);
+  for (std::size_t i = 0; i < st.size(); ++i)
+    EXPECT_GE(st.pressure[i], 0.0);
   EXPECT_EQ(st.pressure[corner], 0.0);
 }
 
@@ -120,5 +121,6 @@ TEST(Determinism, SameAccelerationsWithOneAndTwoThreads) {
   const auto one = run(1);
   const auto two = run(2);
   ASSERT_EQ(one.size(), two.size());
-  for (std::size_t i = 0; i < one.size(); ++i) ASSERT_EQ(one[i], two[i]) << i;
+  for (std::size_t i = 0; i < one.size(); ++i)
+    ASSERT_EQ(one[i], two[i]) << i;
 }

@@ -33,7 +33,8 @@ TEST(Kernel, LatticeSumIsNearOneOverCellVolume) {
   double sum = 0.0;
   for (int i = -3; i <= 3; ++i)
     for (int j = -3; j <= 3; ++j)
-      for (int l = -3; l <= 3; ++l) sum += k.value(s * std::sqrt(double(i * i + j * j + l * l)));
+      for (int l = -3; l <= 3; ++l)
+        sum += k.value(s * std::sqrt(double(i * i + j * j + l * l)));
   EXPECT_NEAR(sum * s * s * s, 1.0, 0.01);
 }
 
@@ -72,6 +73,7 @@ TEST(Kernel, GradientsSumToZeroInALattice) {
   Vec3 sum = Vec3::Zero();
   for (int i = -3; i <= 3; ++i)
     for (int j = -3; j <= 3; ++j)
-      for (int l = -3; l <= 3; ++l) sum += k.gradient(s * Vec3(i, j, l));
+      for (int l = -3; l <= 3; ++l)
+        sum += k.gradient(s * Vec3(i, j, l));
   EXPECT_LT(sum.norm(), 1e-9 * k.gradient(Vec3(s, 0, 0)).norm());
 }

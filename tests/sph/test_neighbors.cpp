@@ -27,18 +27,21 @@ void expectMatchesBruteForce(std::vector<Vec3> x, const Aabb& domain, double r) 
   grid.sort(x, order);
   ASSERT_EQ(order.size(), x.size());
   std::vector<Vec3> sorted(x.size());
-  for (std::size_t k = 0; k < x.size(); ++k) sorted[k] = x[order[k]];
+  for (std::size_t k = 0; k < x.size(); ++k)
+    sorted[k] = x[order[k]];
   // order is a permutation
   std::vector<std::uint32_t> check = order;
   std::sort(check.begin(), check.end());
-  for (std::size_t k = 0; k < check.size(); ++k) ASSERT_EQ(check[k], k);
+  for (std::size_t k = 0; k < check.size(); ++k)
+    ASSERT_EQ(check[k], k);
 
   NeighborList list;
   buildNeighborList(grid, sorted, r, list);
   const auto expected = bruteForce(sorted, r);
   ASSERT_EQ(list.size(), sorted.size());
   for (std::size_t i = 0; i < sorted.size(); ++i) {
-    std::set<std::uint32_t> got(list.index.begin() + list.begin(i), list.index.begin() + list.end(i));
+    std::set<std::uint32_t> got(list.index.begin() + list.begin(i),
+                                list.index.begin() + list.end(i));
     EXPECT_EQ(got.size(), list.end(i) - list.begin(i)) << "duplicates for " << i;
     EXPECT_EQ(got, expected[i]) << "particle " << i;
   }
@@ -52,7 +55,8 @@ TEST(Neighbors, RandomPoints) {
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> u(-1, 1);
   std::vector<Vec3> x(1500);
-  for (Vec3& p : x) p = Vec3(u(rng), u(rng), u(rng));
+  for (Vec3& p : x)
+    p = Vec3(u(rng), u(rng), u(rng));
   expectMatchesBruteForce(x, kDomain, 0.15);
 }
 
@@ -61,7 +65,8 @@ TEST(Neighbors, ClusteredPoints) {
   std::normal_distribution<double> g(0.0, 0.03);
   std::vector<Vec3> x;
   for (const Vec3& c : {Vec3(0.5, 0.5, 0.5), Vec3(-0.3, 0.1, -0.7)})
-    for (int i = 0; i < 600; ++i) x.push_back(c + Vec3(g(rng), g(rng), g(rng)));
+    for (int i = 0; i < 600; ++i)
+      x.push_back(c + Vec3(g(rng), g(rng), g(rng)));
   expectMatchesBruteForce(x, kDomain, 0.05);
 }
 
@@ -70,7 +75,8 @@ TEST(Neighbors, PointsOnCellBorders) {
   const double r = 0.25;
   std::vector<Vec3> x;
   for (int i = -4; i <= 4; ++i)
-    for (int j = -4; j <= 4; ++j) x.push_back(Vec3(i * r, j * r, 0.0));
+    for (int j = -4; j <= 4; ++j)
+      x.push_back(Vec3(i * r, j * r, 0.0));
   x.push_back(Vec3(0.1, 0.1, 0.25));
   expectMatchesBruteForce(x, kDomain, r);
 }
@@ -89,12 +95,14 @@ TEST(Neighbors, SameListsWithOneAndTwoThreads) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1, 1);
   std::vector<Vec3> x(3000);
-  for (Vec3& p : x) p = Vec3(u(rng), u(rng), u(rng));
+  for (Vec3& p : x)
+    p = Vec3(u(rng), u(rng), u(rng));
   UniformGrid grid(kDomain, 0.12);
   std::vector<std::uint32_t> order;
   grid.sort(x, order);
   std::vector<Vec3> sorted(x.size());
-  for (std::size_t k = 0; k < x.size(); ++k) sorted[k] = x[order[k]];
+  for (std::size_t k = 0; k < x.size(); ++k)
+    sorted[k] = x[order[k]];
   NeighborList one, two;
   omp_set_num_threads(1);
   buildNeighborList(grid, sorted, 0.12, one);
