@@ -24,8 +24,7 @@ double flatLatticeKernelSum(const CubicSplineKernel& kernel, double s) {
 Aabb transformBounds(const Aabb& b, const Pose& pose, bool to_world) {
   Aabb out;
   for (int corner = 0; corner < 8; ++corner) {
-    const Vec3 p((corner & 1) ? b.max.x() : b.min.x(), (corner & 2) ? b.max.y() : b.min.y(),
-                 (corner & 4) ? b.max.z() : b.min.z());
+    const Vec3 p = b.corner(corner);
     out.extend(to_world ? pose.toWorld(p) : pose.toBody(p));
   }
   return out;

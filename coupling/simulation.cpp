@@ -39,10 +39,7 @@ Aabb sceneBounds(const SimulationSettings& s) {
     const Aabb local = body.shape->bounds(unbounded);
     if (local.empty() || !local.min.allFinite() || !local.max.allFinite()) continue;
     for (int corner = 0; corner < 8; ++corner) {
-      const Vec3 p((corner & 1) ? local.max.x() : local.min.x(),
-                   (corner & 2) ? local.max.y() : local.min.y(),
-                   (corner & 4) ? local.max.z() : local.min.z());
-      box.extend(body.pose.toWorld(p));
+      box.extend(body.pose.toWorld(local.corner(corner)));
     }
   }
   return box;
@@ -94,9 +91,7 @@ double autoSpeedOfSound(const SimulationSettings& s) {
   double v_max = 0.0;
   for (const FluidBlock& b : s.blocks) {
     for (int corner = 0; corner < 8; ++corner) {
-      const Vec3 p((corner & 1) ? b.max.x() : b.min.x(), (corner & 2) ? b.max.y() : b.min.y(),
-                   (corner & 4) ? b.max.z() : b.min.z());
-      fluid_top = std::max(fluid_top, p.dot(up));
+      fluid_top = std::max(fluid_top, Aabb{b.min, b.max}.corner(corner).dot(up));
     }
     v_max = std::max(v_max, b.velocity.norm());
   }
@@ -106,10 +101,7 @@ double autoSpeedOfSound(const SimulationSettings& s) {
   double bottom = fluid_top;
   if (!box.empty()) {
     for (int corner = 0; corner < 8; ++corner) {
-      const Vec3 p((corner & 1) ? box.max.x() : box.min.x(),
-                   (corner & 2) ? box.max.y() : box.min.y(),
-                   (corner & 4) ? box.max.z() : box.min.z());
-      bottom = std::min(bottom, p.dot(up));
+      bottom = std::min(bottom, box.corner(corner).dot(up));
     }
   }
   const double fall = std::max(0.0, fluid_top - bottom);
@@ -236,19 +228,19 @@ double Simulation::step(double t_limit) {
   t0 = Clock::now();
   const double dt = chooseDt(t_limit);
   const std::int64_t n = static_cast<std::int64_t>(st.size());
-  x_old_.resize(st.size());
+  x_pred_.resize(st.size());
   v_old_.resize(st.size());
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
     v_old_[i] = st.velocity[i];
     st.velocity[i] += dt * st.acceleration[i];
-    x_old_[i] = st.position[i] + dt * st.velocity[i];  // x*, predicted
+    x_pred_[i] = st.position[i] + dt * st.velocity[i];  // x*, predicted
   }
   timings_.integration += secondsSince(t0);
 
   // Velocity control at the predicted positions.
   t0 = Clock::now();
-  const std::size_t contacts = boundaries_->controlVelocities(x_old_, v_old_, st.velocity, flags_);
+  const std::size_t contacts = boundaries_->controlVelocities(x_pred_, v_old_, st.velocity, flags_);
   timings_.boundary += secondsSince(t0);
 
   t0 = Clock::now();

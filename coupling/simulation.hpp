@@ -104,7 +104,7 @@ class Simulation {
   std::size_t removed_at_start_ = 0, lost_ = 0, max_penetrating_ = 0;
   double max_density_ratio_ = 0;
   StepTimings timings_;
-  std::vector<Vec3> x_old_;          // scratch: positions at the start of the step
+  std::vector<Vec3> x_pred_;         // scratch: predicted positions x* of the step
   std::vector<Vec3> v_old_;          // scratch: velocities at the start of the step
   std::vector<std::uint8_t> flags_;  // scratch
 };

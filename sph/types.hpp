@@ -27,6 +27,11 @@ struct Aabb {
     min = min.cwiseMin(b.min);
     max = max.cwiseMax(b.max);
   }
+  /// Corner k in [0, 8): bit 0 picks max.x, bit 1 max.y, bit 2 max.z.
+  Vec3 corner(int k) const {
+    return Vec3((k & 1) ? max.x() : min.x(), (k & 2) ? max.y() : min.y(),
+                (k & 4) ? max.z() : min.z());
+  }
   bool contains(const Vec3& p) const {
     return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
   }

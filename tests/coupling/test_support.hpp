@@ -44,8 +44,4 @@ inline void runWithoutPenetration(Simulation& sim, double t) {
   }
 }
 
-inline double maxSpeed(const Simulation& sim) {
-  return sim.fluid().maxSpeed();
-}
-
 }  // namespace wake::test

@@ -171,27 +171,31 @@ double reboundRatio(double restitution, const FluidBlock& block, double t_end) {
 
 }  // namespace
 
-TEST(Restitution, SingleParticleBouncesOnlyWithRestitution) {
-  const FluidBlock drop{Vec3(-0.005, 0.05, -0.005), Vec3(0.005, 0.06, 0.005), Vec3::Zero()};
-  const double elastic = reboundRatio(1.0, drop, 0.2);
-  const double inelastic = reboundRatio(0.0, drop, 0.2);
-  std::printf("[ restitution ] one particle: rebound/impact delta=1 %.3f, delta=0 %.3f\n", elastic,
+namespace {
+
+/// Drops `block` with restitution 1 and 0: it rebounds at its impact speed, or not at all.
+void expectReboundOnlyWithRestitution(const char* what, const FluidBlock& block) {
+  const double elastic = reboundRatio(1.0, block, 0.2);
+  const double inelastic = reboundRatio(0.0, block, 0.2);
+  std::printf("[ restitution ] %s: rebound/impact delta=1 %.3f, delta=0 %.3f\n", what, elastic,
               inelastic);
-  EXPECT_GT(elastic, 0.9);
-  EXPECT_LT(inelastic, 0.05);
+  EXPECT_GT(elastic, 0.9) << what;
+  EXPECT_LT(inelastic, 0.05) << what;
+}
+
+}  // namespace
+
+TEST(Restitution, SingleParticleBouncesOnlyWithRestitution) {
+  expectReboundOnlyWithRestitution(
+      "one particle", {Vec3(-0.005, 0.05, -0.005), Vec3(0.005, 0.06, 0.005), Vec3::Zero()});
 }
 
 TEST(Restitution, ParticleSheetReboundsWithDeltaOneAndNotWithZero) {
   // A block one particle thick (8 x 1 x 8): every particle meets the floor, so the block's
   // rebound is the boundary's restitution. (In thicker blocks only the touching layer is
   // reflected and the fluid's own pressure response dominates the rebound.)
-  const FluidBlock sheet{Vec3(-0.04, 0.03, -0.04), Vec3(0.04, 0.04, 0.04), Vec3::Zero()};
-  const double elastic = reboundRatio(1.0, sheet, 0.2);
-  const double inelastic = reboundRatio(0.0, sheet, 0.2);
-  std::printf("[ restitution ] sheet: rebound/impact delta=1 %.3f, delta=0 %.3f\n", elastic,
-              inelastic);
-  EXPECT_GT(elastic, 0.9);
-  EXPECT_LT(inelastic, 0.05);
+  expectReboundOnlyWithRestitution(
+      "sheet", {Vec3(-0.04, 0.03, -0.04), Vec3(0.04, 0.04, 0.04), Vec3::Zero()});
 }
 
 TEST(Determinism, SameStateWithOneAndTwoThreads) {
