@@ -23,11 +23,18 @@ double flatLatticeKernelSum(const CubicSplineKernel& kernel, double s) {
 
 Aabb transformBounds(const Aabb& b, const Pose& pose, bool to_world) {
   Aabb out;
+  if (b.empty()) return out;
   for (int corner = 0; corner < 8; ++corner) {
     const Vec3 p = b.corner(corner);
     out.extend(to_world ? pose.toWorld(p) : pose.toBody(p));
   }
   return out;
+}
+
+Aabb grown(Aabb b, double by) {
+  b.min.array() -= by;
+  b.max.array() += by;
+  return b;
 }
 
 }  // namespace
@@ -38,223 +45,309 @@ Boundaries::Boundaries(const FluidParams& fluid, const Aabb& domain)
       domain_(domain),
       spacing_(fluid.spacing()),
       radius_(fluid.particle_radius),
-      volume_scale_(spacing_ * spacing_ * spacing_ * flatLatticeKernelSum(kernel_, spacing_)),
-      grid_(makeGrid(domain, fluid.supportRadius())) {
-  // Cells of half the support: the density share searches 2 cells around a particle,
-  // contacts (reach r_f + r_b = half the support) only 1.
-  auto cellsToCover = [&](double distance) {
-    return std::max(1, static_cast<int>(std::ceil(distance / grid_.cellSize() - 1e-12)));
-  };
-  density_reach_ = cellsToCover(kernel_.supportRadius());
-  contact_reach_ = cellsToCover(2.0 * radius_);
-}
-
-UniformGrid Boundaries::makeGrid(const Aabb& domain, double support) {
-  if (UniformGrid::cellsFor(domain, 0.5 * support) <= double(UniformGrid::kMaxCells))
-    return UniformGrid(domain, 0.5 * support, UniformGrid::kMaxCells, 2);
-  return UniformGrid(domain, support, UniformGrid::kMaxCells, 1);
-}
+      volume_scale_(spacing_ * spacing_ * spacing_ * flatLatticeKernelSum(kernel_, spacing_)) {}
 
 std::size_t Boundaries::addBody(const BodySettings& settings) {
+  if (finalized_) throw std::logic_error("Boundaries::addBody after finalize()");
   if (!settings.shape) throw std::invalid_argument("body '" + settings.name + "' has no shape");
   Body b;
   b.settings = settings;
-  const Aabb clip = transformBounds(domain_, settings.pose, /*to_world=*/false);
+  // Infinite shapes are sampled within the domain (grown by a support for the density).
+  const Aabb clip = transformBounds(grown(domain_, fluid_.supportRadius()), settings.pose, false);
   settings.shape->sample(spacing_, radius_, clip, b.local);
-  b.world_bounds = transformBounds(settings.shape->bounds(clip), settings.pose, true);
+  b.sample_count = b.local.size();
+  for (const Vec3& p : b.local.position)
+    b.extent = std::max(b.extent, p.norm() + radius_);
+  b.rotation = settings.pose.orientation.toRotationMatrix();
+  updateWorldBounds(b);
   bodies_.push_back(std::move(b));
   return bodies_.size() - 1;
 }
 
-void Boundaries::setBodyState(std::size_t body, const Pose& pose, const Vec3& linear_velocity,
-                              const Vec3& angular_velocity) {
-  Body& b = bodies_[body];
-  b.settings.pose = pose;
-  b.settings.linear_velocity = linear_velocity;
-  b.settings.angular_velocity = angular_velocity;
-  const Aabb clip = transformBounds(domain_, pose, false);
-  b.world_bounds = transformBounds(b.settings.shape->bounds(clip), pose, true);
+void Boundaries::updateWorldBounds(Body& b) {
+  const Aabb clip = transformBounds(domain_, b.settings.pose, false);
+  b.world_bounds = transformBounds(b.settings.shape->bounds(clip), b.settings.pose, true);
 }
 
-void Boundaries::updateWorld() {
-  std::size_t total = 0;
-  for (Body& b : bodies_) {
-    b.first = static_cast<std::uint32_t>(total);
-    total += b.local.size();
-  }
-  std::vector<Vec3> pos(total), nrm(total);
-  std::vector<std::uint32_t> body(total);
-  for (std::size_t bi = 0; bi < bodies_.size(); ++bi) {
-    const Body& b = bodies_[bi];
-    for (std::size_t k = 0; k < b.local.size(); ++k) {
-      pos[b.first + k] = b.settings.pose.toWorld(b.local.position[k]);
-      nrm[b.first + k] = b.settings.pose.rotate(b.local.normal[k]);
-      body[b.first + k] = static_cast<std::uint32_t>(bi);
-    }
-  }
-  grid_.sort(pos, order_);
-  position_.resize(total);
-  normal_.resize(total);
-  body_of_.resize(total);
+void Boundaries::buildSet(SampleSet& set, const Aabb& box, const std::vector<Vec3>& pos,
+                          const std::vector<Vec3>& nrm, const std::vector<std::uint32_t>& body,
+                          bool flags) {
+  // Cells of half the support: the density share searches 2 cells around a particle,
+  // contacts (reach r_f + r_b = half the support) only 1. Too many cells: full support.
+  const double support = kernel_.supportRadius();
+  const Aabb grid_box = grown(box, support);
+  if (UniformGrid::cellsFor(grid_box, 0.5 * support) <= double(UniformGrid::kMaxCells))
+    set.grid = UniformGrid(grid_box, 0.5 * support, UniformGrid::kMaxCells, 2);
+  else
+    set.grid = UniformGrid(grid_box, support, UniformGrid::kMaxCells, 1);
+  auto cellsToCover = [&](double distance) {
+    return std::max(1, static_cast<int>(std::ceil(distance / set.grid.cellSize() - 1e-12)));
+  };
+  set.density_reach = cellsToCover(support);
+  set.contact_reach = cellsToCover(2.0 * radius_);
+  set.reach_box = grid_box;
+
+  std::vector<std::uint32_t> order;
+  set.grid.sort(pos, order);
+  const std::size_t total = pos.size();
+  set.position.resize(total);
+  set.normal.resize(total);
+  set.body.resize(total);
   for (std::size_t k = 0; k < total; ++k) {
-    position_[k] = pos[order_[k]];
-    normal_[k] = nrm[order_[k]];
-    body_of_[k] = body[order_[k]];
+    set.position[k] = pos[order[k]];
+    set.normal[k] = nrm[order[k]];
+    set.body[k] = body[order[k]];
   }
 
   // Volumes (Akinci et al. 2012), normalised so that a flat wall sampled at the fluid
   // spacing stands for exactly one missing fluid layer: V_k = s^3 S_flat / sum_l W_kl.
   // Samples of an opposite face (a thin wall's other side) are not neighbours.
-  volume_.assign(total, 0.0);
-  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
+  set.volume.assign(total, 0.0);
+  const double support_sq = support * support;
   const std::int64_t n = static_cast<std::int64_t>(total);
 #pragma omp parallel for schedule(static)
   for (std::int64_t k = 0; k < n; ++k) {
     double sum = 0.0;
-    const Vec3 xk = position_[k], nk = normal_[k];
-    grid_.forEachNeighborRange(xk, [&](std::uint32_t lo, std::uint32_t hi) {
+    const Vec3 xk = set.position[k], nk = set.normal[k];
+    set.grid.forEachRangeWithin(xk, set.density_reach, [&](std::uint32_t lo, std::uint32_t hi) {
       for (std::uint32_t l = lo; l < hi; ++l) {
-        const double d_sq = (xk - position_[l]).squaredNorm();
-        if (d_sq < support_sq && nk.dot(normal_[l]) > -0.5) sum += kernel_.value(std::sqrt(d_sq));
+        const double d_sq = (xk - set.position[l]).squaredNorm();
+        if (d_sq < support_sq && nk.dot(set.normal[l]) > -0.5)
+          sum += kernel_.value(std::sqrt(d_sq));
       }
     });
-    volume_[k] = volume_scale_ / sum;
+    set.volume[k] = volume_scale_ / sum;
   }
 
   // Flag the cells from which a sample can be within the kernel support or contact reach.
-  near_.assign(grid_.cellCount(), 0);
-  const Eigen::Vector3i dims = grid_.dims();
+  set.near.clear();
+  if (!flags) return;
+  set.near.assign(set.grid.cellCount(), 0);
+  const Eigen::Vector3i dims = set.grid.dims();
   auto mark = [&](const Eigen::Vector3i& c, int reach, std::uint8_t bit) {
     for (int z = std::max(0, c[2] - reach); z <= std::min(dims[2] - 1, c[2] + reach); ++z)
       for (int y = std::max(0, c[1] - reach); y <= std::min(dims[1] - 1, c[1] + reach); ++y)
         for (int x = std::max(0, c[0] - reach); x <= std::min(dims[0] - 1, c[0] + reach); ++x)
-          near_[grid_.cellIndex(Eigen::Vector3i(x, y, z))] |= bit;
+          set.near[set.grid.cellIndex(Eigen::Vector3i(x, y, z))] |= bit;
   };
   for (std::size_t k = 0; k < total; ++k) {
-    const Eigen::Vector3i c = grid_.cellCoord(position_[k]);
-    mark(c, density_reach_, kNearDensity);
-    mark(c, contact_reach_, kNearContact);
+    const Eigen::Vector3i c = set.grid.cellCoord(set.position[k]);
+    mark(c, set.density_reach, kNearDensity);
+    mark(c, set.contact_reach, kNearContact);
   }
 }
 
+void Boundaries::finalize() {
+  if (finalized_) throw std::logic_error("Boundaries::finalize called twice");
+  finalized_ = true;
+  // Static bodies: one world-space set over the domain.
+  std::vector<Vec3> pos, nrm;
+  std::vector<std::uint32_t> owner;
+  for (std::size_t bi = 0; bi < bodies_.size(); ++bi) {
+    Body& b = bodies_[bi];
+    if (b.settings.moves()) continue;
+    for (std::size_t k = 0; k < b.local.size(); ++k) {
+      pos.push_back(b.settings.pose.toWorld(b.local.position[k]));
+      nrm.push_back(b.settings.pose.rotate(b.local.normal[k]));
+      owner.push_back(static_cast<std::uint32_t>(bi));
+    }
+    b.local.clear();
+  }
+  if (!pos.empty()) buildSet(static_, domain_, pos, nrm, owner, /*flags=*/true);
+  // Moving bodies: one body-space set each.
+  for (std::size_t bi = 0; bi < bodies_.size(); ++bi) {
+    Body& b = bodies_[bi];
+    if (!b.settings.moves()) continue;
+    MovingBody m;
+    m.body = static_cast<std::uint32_t>(bi);
+    Aabb box;
+    for (const Vec3& p : b.local.position)
+      box.extend(p);
+    if (!box.empty()) {
+      buildSet(m.samples, box, b.local.position, b.local.normal,
+               std::vector<std::uint32_t>(b.local.size(), m.body), /*flags=*/false);
+    }
+    b.local.clear();
+    b.moving = static_cast<std::int32_t>(moving_.size());
+    moving_.push_back(std::move(m));
+  }
+  for (std::size_t bi = 0; bi < bodies_.size(); ++bi) {
+    const Body& b = bodies_[bi];
+    if (b.moving >= 0)
+      setBodyState(bi, {b.settings.pose, b.settings.linear_velocity, b.settings.angular_velocity});
+  }
+}
+
+void Boundaries::setBodyState(std::size_t body, const RigidState& state) {
+  Body& b = bodies_[body];
+  if (b.moving < 0) throw std::logic_error("body '" + b.settings.name + "' is static");
+  b.settings.pose = state.pose;
+  b.settings.linear_velocity = state.linear_velocity;
+  b.settings.angular_velocity = state.angular_velocity;
+  b.rotation = state.pose.orientation.toRotationMatrix();
+  updateWorldBounds(b);
+  MovingBody& m = moving_[b.moving];
+  m.world_reach = m.samples.position.empty()
+                      ? Aabb()
+                      : transformBounds(m.samples.reach_box, state.pose, /*to_world=*/true);
+  moving_reach_ = Aabb();
+  for (const MovingBody& other : moving_)
+    moving_reach_.extend(other.world_reach);
+}
+
+RigidState Boundaries::bodyState(std::size_t b) const {
+  const BodySettings& s = bodies_[b].settings;
+  return {s.pose, s.linear_velocity, s.angular_velocity};
+}
+
+std::size_t Boundaries::sampleCount() const {
+  std::size_t total = static_.position.size();
+  for (const MovingBody& m : moving_)
+    total += m.samples.position.size();
+  return total;
+}
+
+void Boundaries::worldSamples(std::vector<Vec3>& position, std::vector<Vec3>& normal,
+                              std::vector<double>& volume, std::vector<std::uint32_t>& body) const {
+  position = static_.position;
+  normal = static_.normal;
+  volume = static_.volume;
+  body = static_.body;
+  for (const MovingBody& m : moving_) {
+    const Pose& pose = bodies_[m.body].settings.pose;
+    for (std::size_t k = 0; k < m.samples.position.size(); ++k) {
+      position.push_back(pose.toWorld(m.samples.position[k]));
+      normal.push_back(pose.rotate(m.samples.normal[k]));
+      volume.push_back(m.samples.volume[k]);
+      body.push_back(m.body);
+    }
+  }
+}
+
+double Boundaries::densitySum(const SampleSet& set, const Vec3& p) const {
+  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
+  double sum = 0.0;
+  set.grid.forEachRangeWithin(p, set.density_reach, [&](std::uint32_t lo, std::uint32_t hi) {
+    for (std::uint32_t k = lo; k < hi; ++k) {
+      const double d_sq = (p - set.position[k]).squaredNorm();
+      if (d_sq < support_sq) sum += set.volume[k] * kernel_.value(std::sqrt(d_sq));
+    }
+  });
+  return sum;
+}
+
 void Boundaries::addDensity(const Fluid& fluid, std::vector<double>& density) const {
-  if (position_.empty()) return;
   const std::vector<Vec3>& x = fluid.state().position;
   const double rho0 = fluid_.rest_density;
-  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
+  const bool has_static = !static_.position.empty();
   const std::int64_t n = static_cast<std::int64_t>(x.size());
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
     const Vec3 xi = x[i];
-    if (!near(xi, kNearDensity)) continue;
     double sum = 0.0;
-    grid_.forEachRangeWithin(xi, density_reach_, [&](std::uint32_t lo, std::uint32_t hi) {
-      for (std::uint32_t k = lo; k < hi; ++k) {
-        const double d_sq = (xi - position_[k]).squaredNorm();
-        if (d_sq < support_sq) sum += volume_[k] * kernel_.value(std::sqrt(d_sq));
+    if (has_static && (static_.near[static_.grid.cellIndex(xi)] & kNearDensity))
+      sum += densitySum(static_, xi);
+    if (moving_reach_.contains(xi)) {
+      for (const MovingBody& m : moving_) {
+        if (!m.world_reach.contains(xi)) continue;
+        const Body& b = bodies_[m.body];
+        const Vec3 p = b.rotation.transpose() * (xi - b.settings.pose.position);
+        if (m.samples.reach_box.contains(p)) sum += densitySum(m.samples, p);
       }
-    });
+    }
     density[i] += rho0 * sum;
   }
 }
 
-std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxContacts>& out) const {
-  if (position_.empty() || !near(x, kNearContact)) return 0;
+template <class F>
+void Boundaries::forEachContactCandidate(const SampleSet& set, const Vec3& p, F&& f) const {
   const double reach = radius_ + radius_;  // r_f + r_b
   const double reach_sq = reach * reach;
-  std::size_t count = 0;
-  grid_.forEachRangeWithin(x, contact_reach_, [&](std::uint32_t lo, std::uint32_t hi) {
+  set.grid.forEachRangeWithin(p, set.contact_reach, [&](std::uint32_t lo, std::uint32_t hi) {
     for (std::uint32_t k = lo; k < hi; ++k) {
-      const double d_sq = (x - position_[k]).squaredNorm();
-      if (d_sq >= reach_sq) continue;
-      const std::uint32_t body = body_of_[k];
-      std::size_t c = 0;
-      while (c < count && out[c].body != body)
-        ++c;
-      if (c < count) {
-        // Ties go to the lower sample index, so the result is independent of visit order.
-        if (d_sq < out[c].dist_sq || (d_sq == out[c].dist_sq && k < out[c].sample))
-          out[c] = {body, k, d_sq};
-      } else if (count < kMaxContacts) {
-        out[count++] = {body, k, d_sq};
-      } else {
-        // More bodies than slots: replace the farthest contact if this one is nearer.
-        std::size_t far = 0;
-        for (std::size_t q = 1; q < count; ++q)
-          if (out[q].dist_sq > out[far].dist_sq) far = q;
-        if (d_sq < out[far].dist_sq) out[far] = {body, k, d_sq};
-      }
+      const double d_sq = (p - set.position[k]).squaredNorm();
+      if (d_sq < reach_sq) f(k, d_sq);
     }
   });
+}
+
+std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxContacts>& out) const {
+  std::size_t count = 0;
+  // Keeps the nearest sample per body; ties go to the lower sample index, so the result
+  // does not depend on the visit order.
+  auto offer = [&](std::uint32_t body, std::uint32_t k, double d_sq) {
+    std::size_t c = 0;
+    while (c < count && out[c].body != body)
+      ++c;
+    if (c < count) {
+      if (d_sq < out[c].dist_sq || (d_sq == out[c].dist_sq && k < out[c].sample))
+        out[c].sample = k, out[c].dist_sq = d_sq;
+    } else if (count < kMaxContacts) {
+      out[count].body = body;
+      out[count].sample = k;
+      out[count].dist_sq = d_sq;
+      ++count;
+    } else {
+      // More bodies than slots: replace the farthest contact if this one is nearer.
+      std::size_t far = 0;
+      for (std::size_t q = 1; q < count; ++q)
+        if (out[q].dist_sq > out[far].dist_sq) far = q;
+      if (d_sq < out[far].dist_sq)
+        out[far].body = body, out[far].sample = k, out[far].dist_sq = d_sq;
+    }
+  };
+  if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
+    forEachContactCandidate(static_, x,
+                            [&](std::uint32_t k, double d_sq) { offer(static_.body[k], k, d_sq); });
+  }
+  if (moving_reach_.contains(x)) {
+    for (const MovingBody& m : moving_) {
+      if (!m.world_reach.contains(x)) continue;
+      const Body& b = bodies_[m.body];
+      const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
+      if (!m.samples.reach_box.contains(p)) continue;
+      forEachContactCandidate(m.samples, p,
+                              [&](std::uint32_t k, double d_sq) { offer(m.body, k, d_sq); });
+    }
+  }
+  if (count == 0) return 0;
   std::sort(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(count),
             [](const Contact& a, const Contact& b) {
               return a.dist_sq < b.dist_sq || (a.dist_sq == b.dist_sq && a.body < b.body);
             });
-  return count;
-}
-
-std::size_t Boundaries::controlVelocities(const std::vector<Vec3>& x_pred,
-                                          const std::vector<Vec3>& v_old, std::vector<Vec3>& v,
-                                          std::vector<std::uint8_t>& in_contact_flag) const {
-  const std::int64_t n = static_cast<std::int64_t>(x_pred.size());
-  in_contact_flag.assign(x_pred.size(), 0);
-  if (position_.empty()) return 0;
-  std::size_t in_contact = 0;
-#pragma omp parallel for schedule(static) reduction(+ : in_contact)
-  for (std::int64_t i = 0; i < n; ++i) {
-    std::array<Contact, kMaxContacts> contacts;
-    const std::size_t count = findContacts(x_pred[i], contacts);
-    if (count == 0) continue;
-    ++in_contact;
-    in_contact_flag[i] = 1;
-    Vec3 vi = v[i];
-    // Pass 0 sets each contact's full target (eq. 8-9). With several bodies, later
-    // passes only remove approach velocity that an earlier contact's update re-created.
-    const int passes = count > 1 ? 3 : 1;
-    for (int pass = 0; pass < passes; ++pass) {
-      for (std::size_t c = 0; c < count; ++c) {
-        const BodySettings& body = bodies_[contacts[c].body].settings;
-        const Vec3 nrm = normal_[contacts[c].sample];
-        const Vec3 x_cp = position_[contacts[c].sample] + radius_ * nrm;
-        const Vec3 v_cp =
-            body.linear_velocity + body.angular_velocity.cross(x_cp - body.pose.position);
-        const Vec3 vr = vi - v_cp;  // predicted relative velocity v*_r
-        const double vn = vr.dot(nrm);
-        // Restitution reflects only the approach speed at the start of the step.
-        const double vn_old = std::min(0.0, (v_old[i] - v_cp).dot(nrm));
-        const double target_n = vn > 0.0 ? vn : -body.restitution * vn_old;
-        if (pass == 0) {
-          const Vec3 vt = vr - vn * nrm;
-          vi = v_cp + body.slip * vt + target_n * nrm;
-        } else if (vn < target_n) {
-          vi += (target_n - vn) * nrm;
-        }
-      }
+  for (std::size_t c = 0; c < count; ++c) {
+    Contact& ct = out[c];
+    const Body& b = bodies_[ct.body];
+    if (b.moving < 0) {
+      ct.normal = static_.normal[ct.sample];
+      ct.point = static_.position[ct.sample] + radius_ * ct.normal;
+    } else {
+      const SampleSet& set = moving_[b.moving].samples;
+      ct.normal = b.rotation * set.normal[ct.sample];
+      ct.point = b.rotation * (set.position[ct.sample] + radius_ * set.normal[ct.sample]) +
+                 b.settings.pose.position;
     }
-    v[i] = vi;
   }
-  return in_contact;
+  return count;
 }
 
 void Boundaries::correctPositions(std::vector<Vec3>& x,
                                   const std::vector<std::uint8_t>& candidates) const {
-  if (position_.empty()) return;
+  if (bodies_.empty()) return;
   const std::int64_t n = static_cast<std::int64_t>(x.size());
   const double rf = radius_;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
-    if (!candidates[i]) continue;
+    if (!candidates[i] && !moving_reach_.contains(x[i])) continue;
     Vec3 xi = x[i];
     std::array<Contact, kMaxContacts> contacts;
     for (int pass = 0; pass < 4; ++pass) {
       const std::size_t count = findContacts(xi, contacts);
       bool moved = false;
       for (std::size_t c = 0; c < count; ++c) {
-        const Vec3 nrm = normal_[contacts[c].sample];
-        const Vec3 x_cp = position_[contacts[c].sample] + radius_ * nrm;
-        const double d = rf - (xi - x_cp).dot(nrm);
+        const double d = rf - (xi - contacts[c].point).dot(contacts[c].normal);
         if (d > 0.0) {
-          xi += d * nrm;
+          xi += d * contacts[c].normal;
           moved = true;
         }
       }

@@ -1,12 +1,17 @@
-// Boundary particles of all bodies and static/one-way direct forcing (DESIGN.md §3-4).
+// Boundary particles of all bodies (DESIGN.md §3-4): sampling, the fluid's density share,
+// contacts, position correction and penetration counts.
 //
-// Every body's surface is sampled once in body space (coupling/shape.hpp); the samples'
-// world positions, normals and volumes live here in flat arrays sorted by grid cell.
-// Boundary particles take part in the fluid's density (their share of the kernel support,
-// so fluid at a wall has no density deficit) but exert no pressure force: direct forcing
-// (velocity control, then position correction) keeps fluid out of the bodies.
+// Every body's surface is sampled once in body space (coupling/shape.hpp). Static bodies'
+// samples are placed in the world once, in flat arrays sorted by grid cell. A moving
+// (kinematic or dynamic) body keeps its samples in body space, sorted in its own grid;
+// a query transforms the fluid position into the body's frame, so moving a body costs
+// nothing but its new pose. Boundary particles take part in the fluid's density (their
+// share of the kernel support, so fluid at a wall has no density deficit) but exert no
+// pressure force: direct forcing (velocity control, then position correction) keeps fluid
+// out of the bodies.
 #pragma once
 
+#include "coupling/rigid_body.hpp"
 #include "coupling/shape.hpp"
 #include "sph/fluid.hpp"
 
@@ -17,25 +22,32 @@
 
 namespace wake {
 
-enum class BodyKind { Static, Kinematic, Dynamic };
-
-/// One rigid body as the scene describes it.
+/// One rigid body as the coupling sees it.
 struct BodySettings {
   std::string name;
   BodyKind kind = BodyKind::Static;
-  std::shared_ptr<const Shape> shape;    ///< exact shape, body space
+  CouplingMode coupling = CouplingMode::TwoWay;  ///< dynamic bodies only
+  std::shared_ptr<const Shape> shape;    ///< exact shape, body space (origin = centre of mass)
   Pose pose;                             ///< body -> world; position = centre of mass
   Vec3 linear_velocity = Vec3::Zero();   ///< m/s, world
   Vec3 angular_velocity = Vec3::Zero();  ///< rad/s, world
+  double mass = 0.0;                     ///< kg, dynamic bodies (SimpleRigidBodies)
+  Vec3 inertia = Vec3::Zero();           ///< kg m^2, principal moments, body space
   double slip = 0.0;                     ///< eps in [0, 1]: 0 no-slip, 1 free slip
   double restitution = 0.0;              ///< delta in [0, 1]: 0 inelastic
+
+  bool moves() const { return kind != BodyKind::Static; }
+  /// True when the fluid's forces act on the body.
+  bool twoWay() const { return kind == BodyKind::Dynamic && coupling == CouplingMode::TwoWay; }
 };
 
 /// Contact of one fluid particle with one body: the body's nearest overlapping sample.
 struct Contact {
-  std::uint32_t body = 0;    ///< body index
-  std::uint32_t sample = 0;  ///< index into the world sample arrays
-  double dist_sq = 0;        ///< m^2, squared distance fluid centre - sample centre
+  std::uint32_t body = 0;      ///< body index
+  std::uint32_t sample = 0;    ///< the body's sample (index into its sorted samples)
+  double dist_sq = 0;          ///< m^2, squared distance fluid centre - sample centre
+  Vec3 point = Vec3::Zero();   ///< contact point x_cp = x_b + r_b n, world
+  Vec3 normal = Vec3::Zero();  ///< outward unit normal n, world
 };
 
 class Boundaries {
@@ -44,42 +56,46 @@ class Boundaries {
   Boundaries(const FluidParams& fluid, const Aabb& domain);
 
   /// Adds a body and samples its surface (infinite shapes within the domain).
-  /// Returns its index. Call updateWorld() after the last body.
+  /// Returns its index. Call finalize() after the last body.
   std::size_t addBody(const BodySettings& body);
-  /// Moves a body (its pose and velocities at the current time).
-  void setBodyState(std::size_t body, const Pose& pose, const Vec3& linear_velocity,
-                    const Vec3& angular_velocity);
-  /// Recomputes world samples from body poses, re-sorts them by cell and updates volumes.
-  void updateWorld();
+  /// Sorts the static samples and computes every sample's volume. Call once.
+  void finalize();
+  /// Moves a kinematic or dynamic body (its pose and velocities now). Cheap: a moving
+  /// body's samples stay in body space. Static bodies cannot be moved.
+  void setBodyState(std::size_t body, const RigidState& state);
 
   std::size_t bodyCount() const { return bodies_.size(); }
   const BodySettings& body(std::size_t b) const { return bodies_[b].settings; }
-  std::size_t sampleCount() const { return position_.size(); }
-  std::size_t bodySampleCount(std::size_t b) const { return bodies_[b].local.size(); }
+  RigidState bodyState(std::size_t b) const;
+  std::size_t sampleCount() const;
+  std::size_t bodySampleCount(std::size_t b) const { return bodies_[b].sample_count; }
   double sampleRadius() const { return radius_; }
+  /// Largest distance of a body's samples from its origin (m): bounds surface speeds.
+  double bodyExtent(std::size_t b) const { return bodies_[b].extent; }
 
-  /// World sample arrays, sorted by grid cell.
-  const std::vector<Vec3>& samplePositions() const { return position_; }  ///< (k) m
-  const std::vector<Vec3>& sampleNormals() const { return normal_; }      ///< (k) unit
-  const std::vector<double>& sampleVolumes() const { return volume_; }    ///< (k) m^3
+  /// World positions, normals and volumes of all samples (static ones in cell order,
+  /// then each moving body's at its current pose). For output and tests; allocates.
+  void worldSamples(std::vector<Vec3>& position, std::vector<Vec3>& normal,
+                    std::vector<double>& volume, std::vector<std::uint32_t>& body) const;
 
   /// Adds the boundary's share rho0 * sum_k V_k W(x_a - x_k) to each fluid density.
   void addDensity(const Fluid& fluid, std::vector<double>& density) const;
 
-  /// Velocity control for one-way boundaries (eq. 8-9 with m_c -> inf):
-  /// x_pred: positions predicted with v (= v*); v_old: velocities at the start of the step;
-  /// v: predicted velocities v*, replaced by the controlled velocities where in contact.
-  /// in_contact: (n) set to 1 for particles with a contact, else 0.
-  /// Returns the number of particles in contact.
-  std::size_t controlVelocities(const std::vector<Vec3>& x_pred, const std::vector<Vec3>& v_old,
-                                std::vector<Vec3>& v, std::vector<std::uint8_t>& in_contact) const;
+  /// Most bodies one fluid particle is in contact with at once (the nearest are kept).
+  static constexpr std::size_t kMaxContacts = 8;
+  /// Contacts of a fluid centre x with every body: the nearest overlapping sample per
+  /// body (|x - x_b| < r_f + r_b), nearest first. Returns how many were written.
+  std::size_t findContacts(const Vec3& x, std::array<Contact, kMaxContacts>& out) const;
+  /// True when x may be within contact reach of a moving body.
+  bool nearMovingBody(const Vec3& x) const { return moving_reach_.contains(x); }
+  bool hasMovingBodies() const { return !moving_.empty(); }
 
   /// Position correction (eq. 19-20): moves fluid centres out to at least their radius
   /// from the tangent plane of their nearest overlapping sample, a few passes so that a
   /// particle in a corner or between bodies ends outside all of them.
-  /// Only particles flagged in `candidates` are looked at: with bodies that did not move
-  /// since the velocity control, a particle without a contact at its predicted position
-  /// x* has none at its final one (uncontrolled particles end exactly at x*).
+  /// Particles flagged in `candidates` and particles near a moving body are looked at:
+  /// with static bodies, a particle without a contact at its predicted position x* has
+  /// none at its final one (uncontrolled particles end exactly at x*).
   void correctPositions(std::vector<Vec3>& x, const std::vector<std::uint8_t>& candidates) const;
 
   /// Number of fluid centres strictly inside some body's exact shape.
@@ -87,41 +103,56 @@ class Boundaries {
   /// Signed distance (m) from x to the nearest body surface (< 0 inside); +inf if none.
   double signedDistance(const Vec3& x) const;
 
-  /// Most bodies one fluid particle is in contact with at once (the nearest are kept).
-  static constexpr std::size_t kMaxContacts = 8;
-  /// Contacts of a fluid centre x with every body: the nearest overlapping sample per
-  /// body (|x - x_b| < r_f + r_b), nearest first. Returns how many were written.
-  std::size_t findContacts(const Vec3& x, std::array<Contact, kMaxContacts>& out) const;
-
  private:
+  /// Samples of one body in a grid: the static set (world space) or one moving body
+  /// (body space). Sorted by cell.
+  struct SampleSet {
+    UniformGrid grid;
+    Aabb reach_box;  ///< where a query can find a sample within the kernel support
+    std::vector<Vec3> position, normal;
+    std::vector<double> volume;
+    std::vector<std::uint32_t> body;  ///< owning body (static set)
+    std::vector<std::uint8_t> near;   ///< (cells) kNear* bits (static set)
+    int density_reach = 1;            ///< cells to search for the kernel support
+    int contact_reach = 1;            ///< cells to search for contacts (r_f + r_b)
+  };
   struct Body {
     BodySettings settings;
-    SurfaceSamples local;     ///< body-space samples
-    Aabb world_bounds;        ///< bounds of the exact shape in world space (clipped)
-    std::uint32_t first = 0;  ///< first of its samples in the unsorted world arrays
+    SurfaceSamples local;  ///< body-space samples (cleared after finalize)
+    std::size_t sample_count = 0;
+    Aabb world_bounds;                 ///< bounds of the exact shape in world space (clipped)
+    double extent = 0.0;               ///< max |sample| in body space
+    std::int32_t moving = -1;          ///< index into moving_, or -1 (static)
+    Mat3 rotation = Mat3::Identity();  ///< body -> world
+  };
+  struct MovingBody {
+    std::uint32_t body = 0;
+    SampleSet samples;
+    Aabb world_reach;  ///< samples' bounds at the current pose, grown by the support
   };
   /// Bit 1: a sample within the kernel support may exist; bit 2: within contact reach.
   static constexpr std::uint8_t kNearDensity = 1, kNearContact = 2;
-  bool near(const Vec3& x, std::uint8_t what) const {
-    return (near_[grid_.cellIndex(x)] & what) != 0;
-  }
-  static UniformGrid makeGrid(const Aabb& domain, double support);
+
+  /// Sorts samples into `set` over `box` and computes their volumes.
+  void buildSet(SampleSet& set, const Aabb& box, const std::vector<Vec3>& pos,
+                const std::vector<Vec3>& nrm, const std::vector<std::uint32_t>& body, bool flags);
+  void updateWorldBounds(Body& b);
+  /// Calls f(k, dist_sq) for each sample k of `set` within contact reach of p (set space).
+  template <class F>
+  void forEachContactCandidate(const SampleSet& set, const Vec3& p, F&& f) const;
+  /// Boundary density sum sum_k V_k W(p - x_k) over `set` (p in the set's space).
+  double densitySum(const SampleSet& set, const Vec3& p) const;
 
   FluidParams fluid_;
   CubicSplineKernel kernel_;
   Aabb domain_;
   double spacing_, radius_;
   double volume_scale_;  ///< s^3 * sum of W over a flat sample lattice: V_k numerator
-  UniformGrid grid_;
   std::vector<Body> bodies_;
-  // World samples, sorted by cell: (k) each.
-  std::vector<Vec3> position_, normal_;
-  std::vector<double> volume_;
-  std::vector<std::uint32_t> body_of_;
-  int density_reach_ = 1;             ///< cells to search for the kernel support
-  int contact_reach_ = 1;             ///< cells to search for contacts (r_f + r_b)
-  std::vector<std::uint8_t> near_;    ///< (cells) kNear* bits: samples within reach
-  std::vector<std::uint32_t> order_;  ///< scratch
+  SampleSet static_;
+  std::vector<MovingBody> moving_;
+  Aabb moving_reach_;  ///< union of the moving bodies' world_reach
+  bool finalized_ = false;
 };
 
 }  // namespace wake

@@ -37,8 +37,8 @@ struct RigidState {
 /// properties the velocity control needs at that state.
 struct RigidPrediction {
   RigidState state;
-  double inverse_mass = 0.0;                   ///< 1/kg; 0 for static, kinematic
-  Mat3 inverse_inertia_world = Mat3::Zero();   ///< world inverse inertia at state.pose
+  double inverse_mass = 0.0;                  ///< 1/kg; 0 for static, kinematic
+  Mat3 inverse_inertia_world = Mat3::Zero();  ///< world inverse inertia at state.pose
 };
 
 /// Force and torque (about the centre of mass), world frame, for one step.
@@ -66,8 +66,8 @@ class RigidBodies {
 struct RigidBodyInit {
   BodyKind kind = BodyKind::Static;
   RigidState state;
-  double mass = 0.0;                    ///< kg, > 0 for dynamic bodies
-  Vec3 inertia = Vec3::Zero();          ///< kg m^2, principal moments in body space
+  double mass = 0.0;            ///< kg, > 0 for dynamic bodies
+  Vec3 inertia = Vec3::Zero();  ///< kg m^2, principal moments in body space
 };
 
 /// Semi-implicit Euler integration under gravity, without body-body contact: static

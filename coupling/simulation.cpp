@@ -70,8 +70,8 @@ void validate(const SimulationSettings& s) {
     const BodySettings& b = s.bodies[i];
     const std::string field = "bodies[" + std::to_string(i) + "]";
     require(b.shape != nullptr, field + ".shape", "missing");
-    require(b.kind == BodyKind::Static, field + ".kind",
-            "only static bodies are supported by this simulation");
+    require(finite(b.linear_velocity) && finite(b.angular_velocity), field + ".linear_velocity",
+            "must be finite");
     require(b.slip >= 0 && b.slip <= 1, field + ".slip", "must be in [0, 1]");
     require(b.restitution >= 0 && b.restitution <= 1, field + ".restitution", "must be in [0, 1]");
     require(finite(b.pose.position) && b.pose.orientation.coeffs().allFinite(), field + ".position",
@@ -109,7 +109,8 @@ double autoSpeedOfSound(const SimulationSettings& s) {
   return 10.0 * v_max;
 }
 
-Simulation::Simulation(SimulationSettings settings) : settings_(std::move(settings)) {
+Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies> rigid)
+    : settings_(std::move(settings)), rigid_(std::move(rigid)), forcing_(settings_.fluid) {
   validate(settings_);
   SimulationSettings& s = settings_;
   if (s.fluid.speed_of_sound <= 0) s.fluid.speed_of_sound = autoSpeedOfSound(s);
@@ -128,11 +129,24 @@ Simulation::Simulation(SimulationSettings settings) : settings_(std::move(settin
               (s.domain.max.array() > s.domain.min.array()).all(),
           "domain", "max must be greater than min on every axis");
 
+  if (!rigid_) {
+    std::vector<RigidBodyInit> init;
+    for (const BodySettings& b : s.bodies)
+      init.push_back({b.kind, {b.pose, b.linear_velocity, b.angular_velocity}, b.mass, b.inertia});
+    rigid_ = std::make_unique<SimpleRigidBodies>(std::move(init), s.gravity);
+  }
+  require(rigid_->count() == s.bodies.size(), "bodies",
+          "the rigid-body integrator has a different number of bodies");
   fluid_ = std::make_unique<Fluid>(s.fluid, s.domain);
   boundaries_ = std::make_unique<Boundaries>(s.fluid, s.domain);
   for (const BodySettings& b : s.bodies)
     boundaries_->addBody(b);
-  boundaries_->updateWorld();
+  boundaries_->finalize();
+  body_now_.resize(s.bodies.size());
+  for (std::size_t b = 0; b < s.bodies.size(); ++b)
+    body_now_[b] = rigid_->state(b);
+  placeBodies(body_now_);
+  wrench_.assign(s.bodies.size(), Wrench{});
 
   // Fill the blocks on the lattice; drop particles outside the domain, inside a body, or
   // closer to a body's surface than their radius (starting overlap blows up runs).
@@ -184,10 +198,22 @@ void Simulation::removeOutsideDomain() {
   lost_ += out;
 }
 
+void Simulation::placeBodies(const std::vector<RigidState>& states) {
+  for (std::size_t b = 0; b < states.size(); ++b)
+    if (boundaries_->body(b).moves()) boundaries_->setBodyState(b, states[b]);
+}
+
 double Simulation::chooseDt(double t_limit) const {
   const FluidParams& f = settings_.fluid;
   const double h = f.smoothingLength();
-  const double v_max = fluid_->maxSpeed();
+  // Fluid at a moving body's surface takes on its speed: count surface speeds too.
+  double v_max = fluid_->maxSpeed();
+  for (std::size_t b = 0; b < boundaries_->bodyCount(); ++b) {
+    if (!boundaries_->body(b).moves()) continue;
+    const RigidState s = boundaries_->bodyState(b);
+    v_max = std::max(
+        v_max, s.linear_velocity.norm() + s.angular_velocity.norm() * boundaries_->bodyExtent(b));
+  }
   const double a_max = fluid_->maxAcceleration();
   double dt = settings_.max_dt;
   dt = std::min(dt, settings_.cfl * h / (f.speed_of_sound + v_max));
@@ -238,10 +264,34 @@ double Simulation::step(double t_limit) {
   }
   timings_.integration += secondsSince(t0);
 
-  // Velocity control at the predicted positions.
+  // Bodies predicted over dt without fluid forces; contacts and velocity control there.
   t0 = Clock::now();
-  const std::size_t contacts = boundaries_->controlVelocities(x_pred_, v_old_, st.velocity, flags_);
-  timings_.boundary += secondsSince(t0);
+  const std::size_t nb = boundaries_->bodyCount();
+  for (std::size_t b = 0; b < nb; ++b)
+    body_now_[b] = rigid_->state(b);
+  rigid_->predict(dt, body_pred_);
+  timings_.rigid += secondsSince(t0);
+
+  t0 = Clock::now();
+  std::vector<RigidState>& pred_states = body_final_;  // scratch reuse
+  pred_states.resize(nb);
+  for (std::size_t b = 0; b < nb; ++b)
+    pred_states[b] = body_pred_[b].state;
+  placeBodies(pred_states);
+  const ControlResult control =
+      forcing_.control(*boundaries_, settings_.method, dt, x_pred_, v_old_, body_now_, body_pred_,
+                       st.velocity, flags_, wrench_);
+  last_contacts_ = control.contacts;
+  const double t_control = secondsSince(t0);
+  timings_.control += t_control;
+  timings_.boundary += t_control;
+
+  // The bodies take exactly one step with the fluid's wrench.
+  t0 = Clock::now();
+  if (nb > 0) rigid_->step(dt, wrench_);
+  for (std::size_t b = 0; b < nb; ++b)
+    body_final_[b] = rigid_->state(b);
+  timings_.rigid += secondsSince(t0);
 
   t0 = Clock::now();
 #pragma omp parallel for schedule(static)
@@ -249,10 +299,14 @@ double Simulation::step(double t_limit) {
     st.position[i] += dt * st.velocity[i];
   timings_.integration += secondsSince(t0);
 
-  // Position correction against the bodies' final poses (static here).
+  // Position correction against the bodies' final poses.
   t0 = Clock::now();
-  if (contacts > 0) boundaries_->correctPositions(st.position, flags_);
-  timings_.boundary += secondsSince(t0);
+  placeBodies(body_final_);
+  if (control.particles > 0 || boundaries_->hasMovingBodies())
+    boundaries_->correctPositions(st.position, flags_);
+  const double t_correction = secondsSince(t0);
+  timings_.correction += t_correction;
+  timings_.boundary += t_correction;
 
   time_ = (t_limit - time_ == dt) ? t_limit : time_ + dt;
   last_dt_ = dt;
@@ -299,9 +353,9 @@ void Simulation::snapshot(FluidSnapshot& out) const {
 std::vector<BodyState> Simulation::bodyStates() const {
   std::vector<BodyState> out;
   for (std::size_t b = 0; b < boundaries_->bodyCount(); ++b) {
-    const BodySettings& body = boundaries_->body(b);
-    out.push_back({body.name, body.pose.position, body.pose.orientation, body.linear_velocity,
-                   body.angular_velocity});
+    const RigidState s = rigid_->state(b);
+    out.push_back({boundaries_->body(b).name, s.pose.position, s.pose.orientation,
+                   s.linear_velocity, s.angular_velocity});
   }
   return out;
 }

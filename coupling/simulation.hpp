@@ -1,10 +1,12 @@
-// A fluid with rigid boundaries, stepped by direct forcing (DESIGN.md §4-5, Algorithm 1).
-// The coupling owns the step order; rigid bodies enter as boundaries with a pose and
-// velocities. In this module all bodies are driven from outside (static here); dynamic
-// bodies are integrated by the Bullet bridge, which plugs into the same step.
+// A fluid with rigid bodies, stepped by direct forcing (DESIGN.md §4-5, Algorithm 1).
+// The coupling owns the step order. Rigid bodies enter through the RigidBodies interface
+// (coupling/rigid_body.hpp): Bullet in bullet_bridge/, or SimpleRigidBodies (gravity, no
+// body-body contact) when none is given.
 #pragma once
 
 #include "coupling/boundary.hpp"
+#include "coupling/direct_forcing.hpp"
+#include "coupling/rigid_body.hpp"
 #include "coupling/shape.hpp"
 #include "sph/fluid.hpp"
 
@@ -20,8 +22,6 @@ struct FluidBlock {
   Vec3 max = Vec3::Zero();       ///< m, > min on every axis
   Vec3 velocity = Vec3::Zero();  ///< m/s, initial velocity of the block
 };
-
-enum class CouplingMethod { Local, Global, Penalty };
 
 struct SimulationSettings {
   Vec3 gravity = Vec3(0, -9.81, 0);  ///< m/s^2
@@ -51,16 +51,24 @@ struct BodyState {
 };
 
 /// Wall-clock seconds spent in each part of the step, summed over steps.
+/// `boundary` is all boundary-particle work: the density share plus `control` (contacts
+/// and velocity control) plus `correction` (position correction). `rigid` is the rigid
+/// bodies' prediction and step (Bullet's step with the bridge).
 struct StepTimings {
-  double neighbors = 0, density = 0, forces = 0, boundary = 0, integration = 0;
-  double total() const { return neighbors + density + forces + boundary + integration; }
+  double neighbors = 0, density = 0, forces = 0, boundary = 0, integration = 0, rigid = 0;
+  double control = 0, correction = 0;  ///< parts of `boundary`
+  double total() const { return neighbors + density + forces + boundary + integration + rigid; }
+  /// The coupling's own cost: contacts, control forces, position correction, rigid step.
+  double coupling() const { return control + correction + rigid; }
 };
 
 class Simulation {
  public:
-  /// Builds the fluid and boundaries. Throws std::invalid_argument naming the offending
-  /// field (e.g. "fluid.particle_radius") when the settings are unusable.
-  explicit Simulation(SimulationSettings settings);
+  /// Builds the fluid and boundaries. `rigid` integrates the bodies (same order and count
+  /// as settings.bodies; it owns their state from now on); without one, SimpleRigidBodies
+  /// is built from the settings. Throws std::invalid_argument naming the offending field
+  /// (e.g. "fluid.particle_radius") when the settings are unusable.
+  explicit Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies> rigid = nullptr);
   ~Simulation();
 
   /// Advances one time step (CFL-limited, never beyond `t_limit`); returns dt taken.
@@ -74,6 +82,11 @@ class Simulation {
   const Fluid& fluid() const { return *fluid_; }
   Fluid& fluid() { return *fluid_; }
   const Boundaries& boundaries() const { return *boundaries_; }
+  const RigidBodies& rigidBodies() const { return *rigid_; }
+  /// The fluid's wrench on each body in the last step (zero for one-way bodies).
+  const std::vector<Wrench>& lastWrenches() const { return wrench_; }
+  /// Particle-body contacts found in the last step.
+  std::size_t lastContacts() const { return last_contacts_; }
 
   std::size_t fluidParticles() const { return fluid_->state().size(); }
   std::size_t boundaryParticles() const;
@@ -94,19 +107,27 @@ class Simulation {
  private:
   double chooseDt(double t_limit) const;
   void removeOutsideDomain();
+  /// Shows every moving body to the boundaries at the given states.
+  void placeBodies(const std::vector<RigidState>& states);
 
   SimulationSettings settings_;
   std::unique_ptr<Fluid> fluid_;
   std::unique_ptr<Boundaries> boundaries_;
+  std::unique_ptr<RigidBodies> rigid_;
+  DirectForcing forcing_;
   double time_ = 0;
   std::uint64_t steps_ = 0;
   double last_dt_ = 0;
   std::size_t removed_at_start_ = 0, lost_ = 0, max_penetrating_ = 0;
   double max_density_ratio_ = 0;
   StepTimings timings_;
-  std::vector<Vec3> x_pred_;         // scratch: predicted positions x* of the step
-  std::vector<Vec3> v_old_;          // scratch: velocities at the start of the step
-  std::vector<std::uint8_t> flags_;  // scratch
+  std::vector<Vec3> x_pred_;                       // scratch: predicted positions x* of the step
+  std::vector<Vec3> v_old_;                        // scratch: velocities at the start of the step
+  std::vector<std::uint8_t> flags_;                // scratch
+  std::vector<RigidState> body_now_, body_final_;  // scratch: body states at t and t + dt
+  std::vector<RigidPrediction> body_pred_;         // scratch: predicted body states
+  std::vector<Wrench> wrench_;
+  std::size_t last_contacts_ = 0;
 };
 
 /// Resolves speed_of_sound "auto": 10 x the largest speed expected in the scene

@@ -25,7 +25,7 @@ struct WallFixture {
       floor.pose.position = Vec3(0, -0.05, 0);  // top face at y = 0
       walls->addBody(floor);
     }
-    walls->updateWorld();
+    walls->finalize();
     // Fluid lattice on the floor, aligned with the samples, first layer at y = r.
     std::uint32_t id = 0;
     for (int k = -6; k < 6; ++k)
@@ -65,11 +65,16 @@ TEST(WallDensity, SampleVolumesMatchTheFluidLatticeOnAFlatFace) {
   WallFixture with(true);
   const Boundaries& w = *with.walls;
   // Samples in the middle of the top face have the volume of one fluid particle, s^3.
+  std::vector<Vec3> position, normal;
+  std::vector<double> volume;
+  std::vector<std::uint32_t> body;
+  w.worldSamples(position, normal, volume, body);
+  ASSERT_EQ(position.size(), w.sampleCount());
   std::size_t checked = 0;
   for (std::size_t k = 0; k < w.sampleCount(); ++k) {
-    const Vec3& p = w.samplePositions()[k];
-    if (w.sampleNormals()[k].y() > 0.99 && std::abs(p.x()) < 0.1 && std::abs(p.z()) < 0.1) {
-      EXPECT_NEAR(w.sampleVolumes()[k], 0.02 * 0.02 * 0.02, 1e-9);
+    const Vec3& p = position[k];
+    if (normal[k].y() > 0.99 && std::abs(p.x()) < 0.1 && std::abs(p.z()) < 0.1) {
+      EXPECT_NEAR(volume[k], 0.02 * 0.02 * 0.02, 1e-9);
       ++checked;
     }
   }

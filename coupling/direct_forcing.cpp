@@ -1,0 +1,231 @@
+#include "coupling/direct_forcing.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include <omp.h>
+#include <algorithm>
+
+namespace wake {
+
+Mat3 crossMatrix(const Vec3& r) {
+  Mat3 m;
+  m << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
+  return m;
+}
+
+Mat3 contactMatrix(double particle_mass, double body_inverse_mass, const Mat3& inverse_inertia,
+                   const Vec3& lever) {
+  const Mat3 r = crossMatrix(lever);
+  return (1.0 / particle_mass + body_inverse_mass) * Mat3::Identity() - r * inverse_inertia * r;
+}
+
+Vec3 localImpulse(double particle_mass, double body_inverse_mass, const Mat3& inverse_inertia,
+                  const Vec3& lever, const Vec3& psi) {
+  const Mat3 k = contactMatrix(particle_mass, body_inverse_mass, inverse_inertia, lever);
+  return k.ldlt().solve(psi);
+}
+
+void GlobalSystem::add(const GlobalContact& c) {
+  const Mat3 r = crossMatrix(c.lever);
+  const double m = c.mass;
+  a_.topLeftCorner<3, 3>().diagonal().array() += m;
+  a_.topRightCorner<3, 3>() -= m * r;  // S^T = (sum m R)^T = -sum m R
+  a_.bottomLeftCorner<3, 3>() += m * r;
+  a_.bottomRightCorner<3, 3>() += m * r.transpose() * r;
+  b_.head<3>() -= m * c.psi;
+  b_.tail<3>() -= m * (r * c.psi);
+}
+
+Mat3 inertiaFromInverse(const Mat3& inverse_inertia) {
+  // A locked rotation axis has a zero inverse inertia: regularise it to a very large
+  // (not infinite) inertia so the system stays solvable and dW ~ 0 about that axis.
+  const double scale = std::max(inverse_inertia.trace(), 1e-300);
+  const Mat3 reg = inverse_inertia + 1e-12 * scale * Mat3::Identity();
+  return reg.inverse();
+}
+
+Mat6 GlobalSystem::matrix(double inverse_mass, const Mat3& inverse_inertia) const {
+  Mat6 a = a_;
+  a.topLeftCorner<3, 3>().diagonal().array() += 1.0 / inverse_mass;
+  a.bottomRightCorner<3, 3>() += inertiaFromInverse(inverse_inertia);
+  return a;
+}
+
+Vec6 GlobalSystem::solve(double inverse_mass, const Mat3& inverse_inertia) const {
+  return matrix(inverse_mass, inverse_inertia).ldlt().solve(b_);
+}
+
+ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMethod method, double dt,
+                                     const std::vector<Vec3>& x_pred,
+                                     const std::vector<Vec3>& v_old,
+                                     const std::vector<RigidState>& now,
+                                     const std::vector<RigidPrediction>& predicted,
+                                     std::vector<Vec3>& v, std::vector<std::uint8_t>& in_contact,
+                                     std::vector<Wrench>& wrench) {
+  const std::size_t n = x_pred.size(), nb = boundaries.bodyCount();
+  in_contact.assign(n, 0);
+  wrench.assign(nb, Wrench{});
+  ControlResult result;
+  if (nb == 0 || n == 0) return result;
+  const double m = particle_mass_;
+  const bool global = method == CouplingMethod::Global;
+  std::vector<std::uint8_t> two_way(nb);
+  for (std::size_t b = 0; b < nb; ++b)
+    two_way[b] = boundaries.body(b).twoWay() && predicted[b].inverse_mass > 0;
+
+  // Effective mass of a normal impulse at a contact: 1 / (n^T K n).
+  auto normalMass = [&](const Record& rec) {
+    if (!two_way[rec.body]) return m;
+    const RigidPrediction& p = predicted[rec.body];
+    const Mat3 k = contactMatrix(m, p.inverse_mass, p.inverse_inertia_world, rec.lever);
+    return 1.0 / rec.normal.dot(k * rec.normal);
+  };
+  auto applyImpulse = [&](Chunk& ch, const Record& rec, const Vec3& j, Vec3& vi) {
+    vi += j / m;
+    if (!two_way[rec.body]) return;
+    ch.impulse[rec.body] -= j;
+    ch.angular[rec.body] -= rec.lever.cross(j);
+  };
+  // Passes that only remove approach velocity towards one of several bodies, whose
+  // contact points move with v_cp + extra(rec).
+  auto normalPasses = [&](Chunk& ch, const Record* rec, std::size_t count, Vec3& vi, auto&& extra) {
+    for (int pass = 0; pass < 2; ++pass) {
+      for (std::size_t c = 0; c < count; ++c) {
+        const double vn = (vi - rec[c].v_cp - extra(rec[c])).dot(rec[c].normal);
+        const double target_n = vn > 0.0 ? vn : rec[c].bounce;
+        if (vn < target_n)
+          applyImpulse(ch, rec[c], normalMass(rec[c]) * (target_n - vn) * rec[c].normal, vi);
+      }
+    }
+  };
+
+  const std::size_t chunk_count = (n + kChunk - 1) / kChunk;
+  if (chunks_.size() < chunk_count) chunks_.resize(chunk_count);
+  std::size_t particles = 0, contacts_total = 0;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : particles, contacts_total)
+  for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunk_count); ++c) {
+    Chunk& ch = chunks_[c];
+    ch.records.clear();
+    ch.impulse.assign(nb, Vec3::Zero());
+    ch.angular.assign(nb, Vec3::Zero());
+    if (global) ch.system.assign(nb, GlobalSystem());
+    std::array<Contact, Boundaries::kMaxContacts> contacts;
+    const std::size_t end = std::min(n, (c + 1) * kChunk);
+    for (std::size_t i = c * kChunk; i < end; ++i) {
+      const std::size_t count = boundaries.findContacts(x_pred[i], contacts);
+      if (count == 0) continue;
+      in_contact[i] = 1;
+      ++particles;
+      contacts_total += count;
+      const std::size_t first = ch.records.size();
+      for (std::size_t k = 0; k < count; ++k) {
+        const Contact& ct = contacts[k];
+        const RigidPrediction& p = predicted[ct.body];
+        const BodySettings& body = boundaries.body(ct.body);
+        Record rec;
+        rec.particle = static_cast<std::uint32_t>(i);
+        rec.body = ct.body;
+        rec.count = static_cast<std::uint32_t>(count);
+        rec.normal = ct.normal;
+        rec.lever = ct.point - p.state.pose.position;
+        rec.v_cp = p.state.linear_velocity + p.state.angular_velocity.cross(rec.lever);
+        // Restitution reflects only the approach speed at the start of the step.
+        const double vn_old = (v_old[i] - now[ct.body].pointVelocity(ct.point)).dot(ct.normal);
+        rec.bounce = -body.restitution * std::min(0.0, vn_old);
+        const Vec3 vr = v[i] - rec.v_cp;  // predicted relative velocity v*_r
+        const double vn = vr.dot(ct.normal);
+        const double target_n = vn > 0.0 ? vn : rec.bounce;  // eq. 9: no sticking
+        rec.psi = body.slip * (vr - vn * ct.normal) + target_n * ct.normal - vr;
+        ch.records.push_back(rec);
+      }
+      if (global) {
+        for (std::size_t k = first; k < ch.records.size(); ++k) {
+          const Record& rec = ch.records[k];
+          if (two_way[rec.body])
+            ch.system[rec.body].add({m / double(rec.count), rec.lever, rec.psi});
+        }
+        continue;
+      }
+      // Local: contacts one after the other, each to its full target (eq. 8-9), then
+      // normal-only passes when there are several.
+      Vec3 vi = v[i];
+      for (std::size_t k = first; k < ch.records.size(); ++k) {
+        const Record& rec = ch.records[k];
+        const BodySettings& body = boundaries.body(rec.body);
+        const Vec3 vr = vi - rec.v_cp;
+        const double vn = vr.dot(rec.normal);
+        const double target_n = vn > 0.0 ? vn : rec.bounce;
+        const Vec3 psi = body.slip * (vr - vn * rec.normal) + target_n * rec.normal - vr;
+        const RigidPrediction& p = predicted[rec.body];
+        const Vec3 j = two_way[rec.body] ? localImpulse(m, p.inverse_mass, p.inverse_inertia_world,
+                                                        rec.lever, psi)
+                                         : Vec3(m * psi);
+        applyImpulse(ch, rec, j, vi);
+      }
+      if (count > 1)
+        normalPasses(ch, &ch.records[first], count, vi, [](const Record&) { return Vec3::Zero(); });
+      v[i] = vi;
+    }
+  }
+  result.particles = particles;
+  result.contacts = contacts_total;
+
+  auto reduceImpulses = [&] {
+    for (std::size_t b = 0; b < nb; ++b) {
+      if (!two_way[b]) continue;
+      Vec3 lin = Vec3::Zero(), ang = Vec3::Zero();
+      for (std::size_t c = 0; c < chunk_count; ++c) {
+        lin += chunks_[c].impulse[b];
+        ang += chunks_[c].angular[b];
+      }
+      wrench[b].force += lin / dt;
+      wrench[b].torque += ang / dt;
+    }
+  };
+  if (!global) {
+    reduceImpulses();
+    return result;
+  }
+
+  // Global: one 6x6 solve per two-way body, summed over chunks in a fixed order.
+  std::vector<Vec6> change(nb, Vec6::Zero());  // [dV; dW]
+  for (std::size_t b = 0; b < nb; ++b) {
+    if (!two_way[b]) continue;
+    GlobalSystem sum;
+    for (std::size_t c = 0; c < chunk_count; ++c)
+      sum.add(chunks_[c].system[b]);
+    if (sum.rhs().isZero(0.0)) continue;
+    const RigidPrediction& p = predicted[b];
+    change[b] = sum.solve(p.inverse_mass, p.inverse_inertia_world);
+    wrench[b].force = change[b].head<3>() / (p.inverse_mass * dt);
+    wrench[b].torque = inertiaFromInverse(p.inverse_inertia_world) * change[b].tail<3>() / dt;
+  }
+  auto bodyChange = [&](const Record& rec) -> Vec3 {
+    if (!two_way[rec.body]) return Vec3::Zero();
+    const Vec6& d = change[rec.body];
+    return d.head<3>() + d.tail<3>().cross(rec.lever);
+  };
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunk_count); ++c) {
+    Chunk& ch = chunks_[c];
+    ch.impulse.assign(nb, Vec3::Zero());
+    ch.angular.assign(nb, Vec3::Zero());
+    for (std::size_t k = 0; k < ch.records.size();) {
+      const Record* rec = &ch.records[k];
+      const std::size_t count = rec->count;
+      const std::uint32_t i = rec->particle;
+      // Each contact's share of the particle: its psi plus the body's velocity change.
+      Vec3 vi = v[i];
+      for (std::size_t q = 0; q < count; ++q)
+        vi += (rec[q].psi + bodyChange(rec[q])) / double(count);
+      if (count > 1) normalPasses(ch, rec, count, vi, bodyChange);
+      v[i] = vi;
+      k += count;
+    }
+  }
+  reduceImpulses();
+  return result;
+}
+
+}  // namespace wake
