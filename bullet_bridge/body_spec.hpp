@@ -22,14 +22,14 @@ struct ShapeSpec {
   Vec3 half_extents = Vec3::Zero();
   double radius = 0.0;
   double height = 0.0;
-  std::vector<Vec3> points;       ///< convex_hull vertices, body space
-  Vec3 normal = Vec3::UnitY();    ///< plane: solid is {x : normal . x < offset}
+  std::vector<Vec3> points;     ///< convex_hull vertices, body space
+  Vec3 normal = Vec3::UnitY();  ///< plane: solid is {x : normal . x < offset}
   double offset = 0.0;
   Vec3 min = Vec3::Zero(), max = Vec3::Zero();  ///< tank cavity
-  double wall_thickness = 0.0;    ///< tank; 0 = automatic (4 particle radii)
-  std::string file;               ///< mesh: absolute path of the OBJ file
-  Vec3 scale = Vec3::Ones();      ///< mesh
-  std::vector<ShapeChild> children;  ///< compound
+  double wall_thickness = 0.0;                  ///< tank; 0 = automatic (4 particle radii)
+  std::string file;                             ///< mesh: absolute path of the OBJ file
+  Vec3 scale = Vec3::Ones();                    ///< mesh
+  std::vector<ShapeChild> children;             ///< compound
   /// Bullet collision margin (m); < 0 = automatic (the fluid's particle radius). Bullet
   /// collides convex shapes (cylinder, cone, convex hull) on their surface grown or rounded
   /// by the margin; the fluid is sampled on that same surface.
@@ -53,11 +53,11 @@ struct BodySpec {
   Pose pose;
   Vec3 linear_velocity = Vec3::Zero();   ///< m/s
   Vec3 angular_velocity = Vec3::Zero();  ///< rad/s
-  double mass = 0.0;     ///< kg; dynamic bodies give mass or density (> 0)
-  double density = 0.0;  ///< kg/m^3
-  double slip = 0.0;         ///< eps in [0, 1] towards the fluid
-  double restitution = 0.0;  ///< delta in [0, 1] towards the fluid
-  double friction = 0.5;     ///< Bullet's body-body friction coefficient, >= 0
+  double mass = 0.0;                     ///< kg; dynamic bodies give mass or density (> 0)
+  double density = 0.0;                  ///< kg/m^3
+  double slip = 0.0;                     ///< eps in [0, 1] towards the fluid
+  double restitution = 0.0;              ///< delta in [0, 1] towards the fluid
+  double friction = 0.5;                 ///< Bullet's body-body friction coefficient, >= 0
 };
 
 }  // namespace wake

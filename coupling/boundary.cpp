@@ -315,20 +315,41 @@ std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxCont
             [](const Contact& a, const Contact& b) {
               return a.dist_sq < b.dist_sq || (a.dist_sq == b.dist_sq && a.body < b.body);
             });
-  for (std::size_t c = 0; c < count; ++c) {
-    Contact& ct = out[c];
-    const Body& b = bodies_[ct.body];
-    if (b.moving < 0) {
-      ct.normal = static_.normal[ct.sample];
-      ct.point = static_.position[ct.sample] + radius_ * ct.normal;
-    } else {
-      const SampleSet& set = moving_[b.moving].samples;
-      ct.normal = b.rotation * set.normal[ct.sample];
-      ct.point = b.rotation * (set.position[ct.sample] + radius_ * set.normal[ct.sample]) +
-                 b.settings.pose.position;
-    }
-  }
+  for (std::size_t c = 0; c < count; ++c)
+    contactGeometry(x, out[c]);
   return count;
+}
+
+void Boundaries::contactGeometry(const Vec3& x, Contact& ct) const {
+  // The sample found the contact; its geometry comes from the exact shape, so edges and
+  // corners push the fluid the right way: n = grad SDF at x, x_cp = x - SDF(x) n.
+  const Body& b = bodies_[ct.body];
+  const Shape& shape = *b.settings.shape;
+  const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
+  const double d = shape.signedDistance(p);
+  const double h = 1e-3 * radius_;
+  Vec3 grad;
+  for (int k = 0; k < 3; ++k) {
+    Vec3 e = Vec3::Zero();
+    e[k] = h;
+    grad[k] = shape.signedDistance(p + e) - shape.signedDistance(p - e);
+  }
+  const double len = grad.norm();
+  if (len > 1e-12 && std::isfinite(d)) {
+    ct.normal = b.rotation * (grad / len);
+    ct.point = x - d * ct.normal;
+    return;
+  }
+  // No gradient (on a medial point): the sample's own normal and surface point.
+  if (b.moving < 0) {
+    ct.normal = static_.normal[ct.sample];
+    ct.point = static_.position[ct.sample] + radius_ * ct.normal;
+  } else {
+    const SampleSet& set = moving_[b.moving].samples;
+    ct.normal = b.rotation * set.normal[ct.sample];
+    ct.point = b.rotation * (set.position[ct.sample] + radius_ * set.normal[ct.sample]) +
+               b.settings.pose.position;
+  }
 }
 
 void Boundaries::correctPositions(std::vector<Vec3>& x,

@@ -46,8 +46,8 @@ struct Contact {
   std::uint32_t body = 0;      ///< body index
   std::uint32_t sample = 0;    ///< the body's sample (index into its sorted samples)
   double dist_sq = 0;          ///< m^2, squared distance fluid centre - sample centre
-  Vec3 point = Vec3::Zero();   ///< contact point x_cp = x_b + r_b n, world
-  Vec3 normal = Vec3::Zero();  ///< outward unit normal n, world
+  Vec3 point = Vec3::Zero();   ///< contact point x_cp on the exact surface, world
+  Vec3 normal = Vec3::Zero();  ///< outward unit normal n of the exact surface, world
 };
 
 class Boundaries {
@@ -84,7 +84,10 @@ class Boundaries {
   /// Most bodies one fluid particle is in contact with at once (the nearest are kept).
   static constexpr std::size_t kMaxContacts = 8;
   /// Contacts of a fluid centre x with every body: the nearest overlapping sample per
-  /// body (|x - x_b| < r_f + r_b), nearest first. Returns how many were written.
+  /// body (|x - x_b| < r_f + r_b), nearest first. The contact's normal is the gradient of
+  /// the exact shape's signed distance at x and its point the nearest surface point
+  /// (DESIGN.md §3: normals from the exact shape), so corners and edges push fluid out
+  /// along the shortest way. Returns how many were written.
   std::size_t findContacts(const Vec3& x, std::array<Contact, kMaxContacts>& out) const;
   /// True when x may be within contact reach of a moving body.
   bool nearMovingBody(const Vec3& x) const { return moving_reach_.contains(x); }
@@ -140,6 +143,8 @@ class Boundaries {
   /// Calls f(k, dist_sq) for each sample k of `set` within contact reach of p (set space).
   template <class F>
   void forEachContactCandidate(const SampleSet& set, const Vec3& p, F&& f) const;
+  /// Contact point and normal of a fluid centre x from the body's exact shape.
+  void contactGeometry(const Vec3& x, Contact& ct) const;
   /// Boundary density sum sum_k V_k W(p - x_k) over `set` (p in the set's space).
   double densitySum(const SampleSet& set, const Vec3& p) const;
 

@@ -1,0 +1,291 @@
+#include "bullet_bridge/coupled_world.hpp"
+
+#include "bullet_bridge/bullet_shapes.hpp"
+
+#include <BulletDynamics/Dynamics/btActionInterface.h>
+#include <btBulletDynamicsCommon.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace wake {
+
+namespace {
+
+Vec3 toVec(const btVector3& v) {
+  return Vec3(double(v.x()), double(v.y()), double(v.z()));
+}
+btVector3 toBt(const Vec3& v) {
+  return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z()));
+}
+Pose toPose(const btTransform& t) {
+  const btQuaternion q = t.getRotation();
+  Pose p;
+  p.position = toVec(t.getOrigin());
+  p.orientation = Quat(double(q.w()), double(q.x()), double(q.y()), double(q.z())).normalized();
+  return p;
+}
+btTransform toBt(const Pose& p) {
+  const Quat& q = p.orientation;
+  return btTransform(
+      btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())),
+      toBt(p.position));
+}
+Mat3 toMat(const btMatrix3x3& m) {
+  Mat3 out;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      out(r, c) = double(m[r][c]);
+  return out;
+}
+
+BodyKind kindOf(const btRigidBody& body) {
+  if (body.isKinematicObject()) return BodyKind::Kinematic;
+  if (body.isStaticObject() || body.getInvMass() == btScalar(0)) return BodyKind::Static;
+  return BodyKind::Dynamic;
+}
+
+/// Undoes Bullet's linear/angular factor on a force it has already scaled.
+Vec3 unscaled(const Vec3& v, const Vec3& factor) {
+  Vec3 out;
+  for (int k = 0; k < 3; ++k)
+    out[k] = factor[k] != 0.0 ? v[k] / factor[k] : 0.0;
+  return out;
+}
+
+}  // namespace
+
+/// Sees every Bullet step: steps not taken by advance() are counted.
+class CoupledWorld::StepWatch final : public btActionInterface {
+ public:
+  void updateAction(btCollisionWorld*, btScalar) override {
+    if (!inside_advance_) ++external_;
+  }
+  void debugDraw(btIDebugDraw*) override {}
+  bool inside_advance_ = false;
+  std::size_t external_ = 0;
+};
+
+/// The coupled Bullet bodies as the coupling's RigidBodies.
+class CoupledWorld::Bodies final : public RigidBodies {
+ public:
+  Bodies(CoupledWorld& owner) : owner_(owner) {
+    const std::size_t n = owner.bodies_.size();
+    user_force_.assign(n, Vec3::Zero());
+    user_torque_.assign(n, Vec3::Zero());
+  }
+
+  std::size_t count() const override { return owner_.bodies_.size(); }
+
+  RigidState state(std::size_t b) const override {
+    const btRigidBody& body = *owner_.bodies_[b];
+    RigidState s;
+    s.pose = toPose(body.getCenterOfMassTransform());
+    if (kindOf(body) == BodyKind::Kinematic) {
+      s.linear_velocity = owner_.kinematic_linear_[b];
+      s.angular_velocity = owner_.kinematic_angular_[b];
+    } else {
+      s.linear_velocity = toVec(body.getLinearVelocity());
+      s.angular_velocity = toVec(body.getAngularVelocity());
+    }
+    return s;
+  }
+
+  /// Forces the user applied before this frame: Bullet clears forces after each of its
+  /// steps, so they are applied again at every sub-step of the frame.
+  void beginFrame() {
+    for (std::size_t b = 0; b < count(); ++b) {
+      const btRigidBody& body = *owner_.bodies_[b];
+      user_force_[b] = unscaled(toVec(body.getTotalForce()), toVec(body.getLinearFactor()));
+      user_torque_[b] = unscaled(toVec(body.getTotalTorque()), toVec(body.getAngularFactor()));
+    }
+  }
+
+  void predict(double dt, std::vector<RigidPrediction>& out) const override {
+    out.resize(count());
+    for (std::size_t b = 0; b < count(); ++b) {
+      const btRigidBody& body = *owner_.bodies_[b];
+      RigidPrediction& p = out[b];
+      p = RigidPrediction{};
+      p.state = state(b);
+      switch (kindOf(body)) {
+        case BodyKind::Static:
+          break;
+        case BodyKind::Kinematic:
+          p.state.pose =
+              integratePose(p.state.pose, p.state.linear_velocity, p.state.angular_velocity, dt);
+          break;
+        case BodyKind::Dynamic: {
+          // As Bullet's step before contacts: gravity and user forces, then damping.
+          p.inverse_mass = double(body.getInvMass());
+          p.inverse_inertia_world = toMat(body.getInvInertiaTensorWorld());
+          const Vec3 lf = toVec(body.getLinearFactor()), af = toVec(body.getAngularFactor());
+          const Vec3 force = (user_force_[b] * p.inverse_mass).cwiseProduct(lf);
+          p.state.linear_velocity += dt * (toVec(body.getGravity()).cwiseProduct(lf) + force);
+          p.state.angular_velocity +=
+              dt * (p.inverse_inertia_world * user_torque_[b].cwiseProduct(af));
+          p.state.linear_velocity *= std::pow(1.0 - double(body.getLinearDamping()), dt);
+          p.state.angular_velocity *= std::pow(1.0 - double(body.getAngularDamping()), dt);
+          p.state.pose =
+              integratePose(p.state.pose, p.state.linear_velocity, p.state.angular_velocity, dt);
+          break;
+        }
+      }
+    }
+  }
+
+  void step(double dt, const std::vector<Wrench>& fluid) override {
+    for (std::size_t b = 0; b < count(); ++b) {
+      btRigidBody& body = *owner_.bodies_[b];
+      switch (kindOf(body)) {
+        case BodyKind::Static:
+          break;
+        case BodyKind::Kinematic: {
+          // Bullet derives a kinematic body's velocity from its motion over the step.
+          const RigidState s = state(b);
+          const btTransform target =
+              toBt(integratePose(s.pose, s.linear_velocity, s.angular_velocity, dt));
+          if (body.getMotionState()) body.getMotionState()->setWorldTransform(target);
+          body.setWorldTransform(target);
+          break;
+        }
+        case BodyKind::Dynamic:
+          body.clearForces();
+          body.applyCentralForce(toBt(user_force_[b] + fluid[b].force));
+          body.applyTorque(toBt(user_torque_[b] + fluid[b].torque));
+          body.activate(true);
+          break;
+      }
+    }
+    owner_.watch_->inside_advance_ = true;
+    owner_.world_.stepSimulation(btScalar(dt), 0, btScalar(dt));
+    owner_.watch_->inside_advance_ = false;
+  }
+
+ private:
+  CoupledWorld& owner_;
+  std::vector<Vec3> user_force_, user_torque_;
+};
+
+CoupledWorld::CoupledWorld(btDiscreteDynamicsWorld& world, CoupledWorldSettings settings)
+    : world_(world), settings_(std::move(settings)), watch_(std::make_unique<StepWatch>()) {
+  world_.addAction(watch_.get());
+}
+
+CoupledWorld::~CoupledWorld() {
+  world_.removeAction(watch_.get());
+}
+
+void CoupledWorld::addFluidBlock(const Vec3& min, const Vec3& max, const Vec3& velocity) {
+  if (sim_) throw std::logic_error("CoupledWorld::addFluidBlock after the first advance()");
+  blocks_.push_back({min, max, velocity});
+}
+
+std::size_t CoupledWorld::couple(btRigidBody* body, const BodyCoupling& coupling) {
+  if (sim_) throw std::logic_error("CoupledWorld::couple after the first advance()");
+  if (!body) throw std::invalid_argument("CoupledWorld::couple: null body");
+  for (const btRigidBody* other : bodies_)
+    if (other == body) throw std::invalid_argument("CoupledWorld::couple: body coupled twice");
+  bodies_.push_back(body);
+  BodyCoupling c = coupling;
+  if (c.name.empty()) c.name = "body" + std::to_string(bodies_.size() - 1);
+  couplings_.push_back(c);
+  // A kinematic body keeps the velocity it has now until told otherwise.
+  kinematic_linear_.push_back(toVec(body->getLinearVelocity()));
+  kinematic_angular_.push_back(toVec(body->getAngularVelocity()));
+  return bodies_.size() - 1;
+}
+
+void CoupledWorld::setKinematicVelocity(btRigidBody* body, const Vec3& linear,
+                                        const Vec3& angular) {
+  for (std::size_t b = 0; b < bodies_.size(); ++b) {
+    if (bodies_[b] != body) continue;
+    if (!body->isKinematicObject())
+      throw std::invalid_argument("setKinematicVelocity: body '" + couplings_[b].name +
+                                  "' is not kinematic");
+    kinematic_linear_[b] = linear;
+    kinematic_angular_[b] = angular;
+    body->setLinearVelocity(toBt(linear));
+    body->setAngularVelocity(toBt(angular));
+    return;
+  }
+  throw std::invalid_argument("setKinematicVelocity: body is not coupled");
+}
+
+void CoupledWorld::start() {
+  if (sim_) return;
+  SimulationSettings s;
+  s.gravity = toVec(world_.getGravity());
+  s.fluid = settings_.fluid;
+  s.blocks = blocks_;
+  s.method = settings_.method;
+  s.cfl = settings_.cfl;
+  s.max_dt = settings_.max_dt;
+  s.domain = settings_.domain;
+  for (std::size_t b = 0; b < bodies_.size(); ++b) {
+    const btRigidBody& body = *bodies_[b];
+    BodySettings bs;
+    bs.name = couplings_[b].name;
+    bs.kind = kindOf(body);
+    bs.coupling = bs.kind == BodyKind::Dynamic ? couplings_[b].coupling : CouplingMode::OneWay;
+    try {
+      bs.shape =
+          couplings_[b].shape ? couplings_[b].shape : bullet::exactShape(*body.getCollisionShape());
+    } catch (const std::exception& e) {
+      throw std::invalid_argument("body '" + bs.name + "': " + e.what());
+    }
+    bs.pose = toPose(body.getCenterOfMassTransform());
+    bs.linear_velocity =
+        bs.kind == BodyKind::Kinematic ? kinematic_linear_[b] : toVec(body.getLinearVelocity());
+    bs.angular_velocity =
+        bs.kind == BodyKind::Kinematic ? kinematic_angular_[b] : toVec(body.getAngularVelocity());
+    if (body.getInvMass() > 0) {
+      bs.mass = 1.0 / double(body.getInvMass());
+      bs.inertia = toVec(body.getLocalInertia());
+    }
+    bs.slip = couplings_[b].slip;
+    bs.restitution = couplings_[b].restitution;
+    s.bodies.push_back(std::move(bs));
+  }
+  auto rigid = std::make_unique<Bodies>(*this);
+  rigid_ = rigid.get();
+  sim_ = std::make_unique<Simulation>(std::move(s), std::move(rigid));
+}
+
+std::size_t CoupledWorld::advance(double frame_time) {
+  if (!(frame_time >= 0) || !std::isfinite(frame_time))
+    throw std::invalid_argument("CoupledWorld::advance: frame_time must be finite and >= 0");
+  if (watch_->external_ > 0)
+    throw std::logic_error(
+        "the Bullet world was stepped " + std::to_string(watch_->external_) +
+        " time(s) outside CoupledWorld::advance(): while a fluid is coupled, step the world "
+        "only through advance(), which steps Bullet once per fluid sub-step");
+  start();
+  rigid_->beginFrame();
+  const double end = sim_->time() + frame_time;
+  std::size_t steps = 0;
+  while (sim_->time() < end) {
+    sim_->step(end);
+    ++steps;
+  }
+  // User forces were for this frame only.
+  for (btRigidBody* body : bodies_)
+    body->clearForces();
+  return steps;
+}
+
+double CoupledWorld::time() const {
+  return sim_ ? sim_->time() : 0.0;
+}
+
+const Simulation& CoupledWorld::simulation() const {
+  if (!sim_) throw std::logic_error("CoupledWorld::simulation before start()");
+  return *sim_;
+}
+
+Simulation& CoupledWorld::simulation() {
+  if (!sim_) throw std::logic_error("CoupledWorld::simulation before start()");
+  return *sim_;
+}
+
+}  // namespace wake

@@ -1,0 +1,105 @@
+// Drop-in two-way coupling of a Wake fluid with an existing Bullet world
+// (DESIGN.md §5, Algorithm 1 with Bullet in the loop).
+//
+//   btDiscreteDynamicsWorld world(...);            // yours, with your bodies
+//   wake::CoupledWorld fluid(world, settings);     // gravity comes from the world
+//   fluid.addFluidBlock({0, 0, 0}, {0.5, 0.3, 0.2});
+//   fluid.couple(tank_body, {"tank"});             // static: mass 0
+//   fluid.couple(box_body, {"box"});               // dynamic: two-way
+//   for (;;) fluid.advance(1.0 / 60);              // instead of world.stepSimulation
+//
+// advance(frame_time) sub-steps with the fluid's CFL step and takes exactly one Bullet
+// step (stepSimulation(dt, 0)) per sub-step: predict the bodies, control the fluid at
+// their surfaces, apply the fluid's force and torque to each two-way body, step Bullet,
+// correct the fluid's positions against the bodies' new poses. Bullet integrates the
+// bodies and resolves body-body contact; forces never leak into the next step (Bullet
+// clears them after each step; forces you applied before advance() act over the whole
+// frame, as they would in one stepSimulation call).
+//
+// Stepping the world yourself: while a CoupledWorld is attached, the world must only be
+// stepped through advance(). A stepSimulation() call of your own moves the bodies
+// without the fluid; it is detected (a btActionInterface sees every Bullet step) and the
+// next advance() throws std::logic_error saying so. Detach by destroying the CoupledWorld.
+//
+// Body kinds follow Bullet: mass 0 -> static; CF_KINEMATIC_OBJECT -> kinematic, one-way,
+// moved by Wake with the velocity given to setKinematicVelocity() (Bullet derives its
+// velocity from that motion); other bodies -> dynamic, two-way unless coupled one-way.
+// Coupled dynamic bodies are kept awake. Bodies are sampled on the surface Bullet
+// collides with (bullet_bridge/bullet_shapes.hpp).
+#pragma once
+
+#include "coupling/simulation.hpp"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+class btDiscreteDynamicsWorld;
+class btRigidBody;
+
+namespace wake {
+
+struct CoupledWorldSettings {
+  FluidParams fluid;  ///< speed_of_sound <= 0 means automatic
+  CouplingMethod method = CouplingMethod::Local;
+  double cfl = 0.4;      ///< CFL number, in (0, 1]
+  double max_dt = 1e-3;  ///< s, largest sub-step
+  Aabb domain;           ///< fluid leaving it is removed; empty = automatic
+};
+
+/// How one Bullet body meets the fluid.
+struct BodyCoupling {
+  BodyCoupling(std::string name_ = {}, double slip_ = 0.0, double restitution_ = 0.0,
+               CouplingMode coupling_ = CouplingMode::TwoWay)
+      : name(std::move(name_)), slip(slip_), restitution(restitution_), coupling(coupling_) {}
+  std::string name;                              ///< for output; default "body<k>"
+  double slip = 0.0;                             ///< eps in [0, 1]: 0 no-slip, 1 free slip
+  double restitution = 0.0;                      ///< delta in [0, 1]: 0 inelastic
+  CouplingMode coupling = CouplingMode::TwoWay;  ///< dynamic bodies: one_way = heavy
+  /// Exact surface to sample, in the body's centre-of-mass frame. Default (null): read
+  /// from the body's collision shape (bullet_bridge/bullet_shapes.hpp).
+  std::shared_ptr<const Shape> shape;
+};
+
+class CoupledWorld {
+ public:
+  /// Attaches to `world` (not owned; it must outlive this object).
+  explicit CoupledWorld(btDiscreteDynamicsWorld& world, CoupledWorldSettings settings = {});
+  ~CoupledWorld();
+  CoupledWorld(const CoupledWorld&) = delete;
+  CoupledWorld& operator=(const CoupledWorld&) = delete;
+
+  /// A box of fluid on the lattice (spacing 2 particle radii). Before the first advance().
+  void addFluidBlock(const Vec3& min, const Vec3& max, const Vec3& velocity = Vec3::Zero());
+  /// Couples a body of the world with the fluid. Before the first advance().
+  /// Returns its index in simulation().bodyStates().
+  std::size_t couple(btRigidBody* body, const BodyCoupling& coupling = {});
+  /// Velocity (world frame, about the centre of mass) of a coupled kinematic body.
+  void setKinematicVelocity(btRigidBody* body, const Vec3& linear, const Vec3& angular);
+
+  /// Builds the fluid and the boundary samples (done by the first advance()).
+  void start();
+  /// Advances fluid and bodies by `frame_time` (s, >= 0); returns the sub-steps taken.
+  std::size_t advance(double frame_time);
+
+  double time() const;
+  bool started() const { return sim_ != nullptr; }
+  /// The coupled simulation (fluid state, timings, body states); after start().
+  const Simulation& simulation() const;
+  Simulation& simulation();
+
+ private:
+  class Bodies;
+  class StepWatch;
+  btDiscreteDynamicsWorld& world_;
+  CoupledWorldSettings settings_;
+  std::vector<FluidBlock> blocks_;
+  std::vector<BodyCoupling> couplings_;
+  std::vector<btRigidBody*> bodies_;
+  std::vector<Vec3> kinematic_linear_, kinematic_angular_;
+  Bodies* rigid_ = nullptr;  ///< owned by sim_
+  std::unique_ptr<StepWatch> watch_;
+  std::unique_ptr<Simulation> sim_;
+};
+
+}  // namespace wake

@@ -1,0 +1,146 @@
+#include "bullet_bridge/scene_world.hpp"
+
+#include "bullet_bridge/bullet_shapes.hpp"
+
+#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
+#include <btBulletDynamicsCommon.h>
+
+#include <stdexcept>
+
+namespace wake {
+
+namespace {
+
+btVector3 toBt(const Vec3& v) {
+  return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z()));
+}
+btTransform toBt(const Pose& p) {
+  const Quat& q = p.orientation;
+  return btTransform(
+      btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())),
+      toBt(p.position));
+}
+Vec3 toVec(const btVector3& v) {
+  return Vec3(double(v.x()), double(v.y()), double(v.z()));
+}
+Pose toPose(const btTransform& t) {
+  const btQuaternion q = t.getRotation();
+  Pose p;
+  p.position = toVec(t.getOrigin());
+  p.orientation = Quat(double(q.w()), double(q.x()), double(q.y()), double(q.z())).normalized();
+  return p;
+}
+
+}  // namespace
+
+struct SceneWorld::BulletParts {
+  btDefaultCollisionConfiguration config;
+  btCollisionDispatcher dispatcher{&config};
+  btDbvtBroadphase broadphase;
+  btSequentialImpulseConstraintSolver solver;
+  btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
+  bullet::ShapeStore shapes;
+  std::vector<std::unique_ptr<btDefaultMotionState>> motion;
+  std::vector<std::unique_ptr<btRigidBody>> bodies;
+
+  BulletParts() { btGImpactCollisionAlgorithm::registerAlgorithm(&dispatcher); }
+  ~BulletParts() {
+    for (auto& b : bodies)
+      world.removeRigidBody(b.get());
+  }
+};
+
+SceneWorld::SceneWorld(const SimulationSettings& sim, const std::vector<BodySpec>& bodies)
+    : bullet_(std::make_unique<BulletParts>()) {
+  if (!sim.bodies.empty())
+    throw std::invalid_argument("SceneWorld: settings.bodies must be empty (bodies come as specs)");
+  btDiscreteDynamicsWorld& world = bullet_->world;
+  world.setGravity(toBt(sim.gravity));
+  CoupledWorldSettings cs;
+  cs.fluid = sim.fluid;
+  cs.method = sim.method;
+  cs.cfl = sim.cfl;
+  cs.max_dt = sim.max_dt;
+  cs.domain = sim.domain;
+  coupled_ = std::make_unique<CoupledWorld>(world, cs);
+  for (const FluidBlock& b : sim.blocks)
+    coupled_->addFluidBlock(b.min, b.max, b.velocity);
+
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    const BodySpec& spec = bodies[k];
+    const std::string field = "bodies[" + std::to_string(k) + "]";
+    const bool dynamic = spec.kind == BodyKind::Dynamic;
+    bullet::BuiltShape shape = bullet::buildShape(spec.shape, dynamic, sim.fluid.particle_radius,
+                                                  bullet_->shapes, field + ".shape");
+    BodyMass m;
+    btCollisionShape* collision = shape.collision;
+    if (dynamic) {
+      const double volume = shape.exact->volume();
+      m.mass = spec.mass > 0 ? spec.mass : spec.density * volume;
+      if (!(m.mass > 0) || !std::isfinite(m.mass))
+        throw std::invalid_argument(field + ".density: gives no finite positive mass");
+      if (spec.shape.type == "compound") {
+        // Bullet's principal-axis transform: the body frame is the centre of mass, the
+        // children are placed relative to it (masses in proportion to child volumes).
+        auto* compound = static_cast<btCompoundShape*>(collision);
+        std::vector<btScalar> masses;
+        double total = 0;
+        for (const ShapeChild& child : spec.shape.children) {
+          const double v =
+              bullet::exactShape(*compound->getChildShape(int(masses.size())))->volume();
+          masses.push_back(btScalar(v));
+          total += v;
+        }
+        for (btScalar& mm : masses)
+          mm = btScalar(m.mass * double(mm) / total);
+        btTransform principal;
+        btVector3 inertia;
+        compound->calculatePrincipalAxisTransform(masses.data(), principal, inertia);
+        auto shifted = std::make_unique<btCompoundShape>();
+        for (int c = 0; c < compound->getNumChildShapes(); ++c)
+          shifted->addChildShape(principal.inverse() * compound->getChildTransform(c),
+                                 compound->getChildShape(c));
+        collision = shifted.get();
+        bullet_->shapes.shapes.push_back(std::move(shifted));
+        m.com = toPose(principal);
+        m.inertia = toVec(inertia);
+      } else {
+        btVector3 inertia;
+        collision->calculateLocalInertia(btScalar(m.mass), inertia);
+        m.inertia = toVec(inertia);
+      }
+    }
+    const Pose body_pose = {spec.pose.toWorld(m.com.position),
+                            (spec.pose.orientation * m.com.orientation).normalized()};
+    auto motion = std::make_unique<btDefaultMotionState>(toBt(body_pose));
+    btRigidBody::btRigidBodyConstructionInfo info(btScalar(m.mass), motion.get(), collision,
+                                                  toBt(m.inertia));
+    info.m_friction = btScalar(spec.friction);
+    auto body = std::make_unique<btRigidBody>(info);
+    if (spec.kind == BodyKind::Kinematic) {
+      body->setCollisionFlags(body->getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
+      body->setActivationState(DISABLE_DEACTIVATION);
+    }
+    if (spec.kind != BodyKind::Static) {
+      body->setLinearVelocity(toBt(spec.linear_velocity));
+      body->setAngularVelocity(toBt(spec.angular_velocity));
+    }
+    world.addRigidBody(body.get());
+    BodyCoupling c;
+    c.name = spec.name;
+    c.slip = spec.slip;
+    c.restitution = spec.restitution;
+    c.coupling = spec.coupling;
+    if (spec.shape.type == "tank") c.shape = shape.exact;  // the container, not 5 boxes
+    coupled_->couple(body.get(), c);
+    bullet_->motion.push_back(std::move(motion));
+    bullet_->bodies.push_back(std::move(body));
+    masses_.push_back(m);
+  }
+}
+
+SceneWorld::~SceneWorld() {
+  coupled_.reset();  // detaches from the world before the world goes
+}
+
+}  // namespace wake
