@@ -255,6 +255,11 @@ void CoupledWorld::start() {
 std::size_t CoupledWorld::advance(double frame_time) {
   if (!(frame_time >= 0) || !std::isfinite(frame_time))
     throw std::invalid_argument("CoupledWorld::advance: frame_time must be finite and >= 0");
+  return advanceTo(time() + frame_time);
+}
+
+std::size_t CoupledWorld::advanceTo(double end) {
+  if (!std::isfinite(end)) throw std::invalid_argument("CoupledWorld::advanceTo: t must be finite");
   if (watch_->external_ > 0)
     throw std::logic_error(
         "the Bullet world was stepped " + std::to_string(watch_->external_) +
@@ -262,7 +267,6 @@ std::size_t CoupledWorld::advance(double frame_time) {
         "only through advance(), which steps Bullet once per fluid sub-step");
   start();
   rigid_->beginFrame();
-  const double end = sim_->time() + frame_time;
   std::size_t steps = 0;
   while (sim_->time() < end) {
     sim_->step(end);

@@ -81,6 +81,8 @@ class CoupledWorld {
   void start();
   /// Advances fluid and bodies by `frame_time` (s, >= 0); returns the sub-steps taken.
   std::size_t advance(double frame_time);
+  /// Advances fluid and bodies to time `t` (s); returns the sub-steps taken.
+  std::size_t advanceTo(double t);
 
   double time() const;
   bool started() const { return sim_ != nullptr; }

@@ -85,9 +85,8 @@ SceneWorld::SceneWorld(const SimulationSettings& sim, const std::vector<BodySpec
         auto* compound = static_cast<btCompoundShape*>(collision);
         std::vector<btScalar> masses;
         double total = 0;
-        for (const ShapeChild& child : spec.shape.children) {
-          const double v =
-              bullet::exactShape(*compound->getChildShape(int(masses.size())))->volume();
+        for (int c = 0; c < compound->getNumChildShapes(); ++c) {
+          const double v = bullet::exactShape(*compound->getChildShape(c))->volume();
           masses.push_back(btScalar(v));
           total += v;
         }

@@ -1,5 +1,6 @@
 #include "io/run.hpp"
 
+#include "bullet_bridge/scene_world.hpp"
 #include "io/output.hpp"
 #include "io/summary.hpp"
 
@@ -139,9 +140,12 @@ RunResult runScene(const SceneFile& scene, const RunOptions& options) {
   if (options.out_dir.empty()) throw SceneError("--out: an output folder is required");
 
   // Everything that can reject the input happens before the output folder is touched.
-  std::unique_ptr<Simulation> sim;
+  std::unique_ptr<SceneWorld> world;
+  Simulation* sim = nullptr;
   try {
-    sim = std::make_unique<Simulation>(scene.sim);
+    world = std::make_unique<SceneWorld>(scene.sim, scene.bodies);
+    world->coupled().start();
+    sim = &world->coupled().simulation();
   } catch (const std::invalid_argument& e) {
     throw SceneError(scene.path + ": " + e.what());
   } catch (const std::bad_alloc&) {
@@ -169,7 +173,7 @@ RunResult runScene(const SceneFile& scene, const RunOptions& options) {
   double previous_time = 0.0;
   try {
     for (std::size_t k = 0; k <= last_frame; ++k) {
-      if (k > 0) sim->advanceTo(frameTime(scene, k));
+      if (k > 0) world->coupled().advanceTo(frameTime(scene, k));
       sim->snapshot(fluid);
       checkHealth(fluid, *sim, scene, k, previous_time, writer.h5Path() + ".partial");
       writer.writeFrame(*sim, fluid);

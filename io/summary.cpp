@@ -53,8 +53,11 @@ nlohmann::ordered_json makeSummary(const SceneFile& scene, const Simulation& sim
   j["threads"] = stats.threads;
   j["mean_dt"] = mean_dt;  // s
   j["output"] = stats.output;
-  j["timings"] = {{"neighbors", t.neighbors}, {"density", t.density},         {"forces", t.forces},
-                  {"boundary", t.boundary},   {"integration", t.integration}, {"total", t.total()}};
+  j["timings"] = {{"neighbors", t.neighbors},     {"density", t.density},
+                  {"forces", t.forces},           {"boundary", t.boundary},
+                  {"integration", t.integration}, {"rigid", t.rigid},
+                  {"control", t.control},         {"correction", t.correction},
+                  {"coupling", t.coupling()},     {"total", t.total()}};
   return j;
 }
 
