@@ -1,6 +1,8 @@
-// Scene loader: JSON -> SimulationSettings, validated field by field (see scene.hpp and
-// io/SCENE_FORMAT.md for the format).
+// Scene loader: JSON -> SimulationSettings and BodySpecs, validated field by field (see
+// scene.hpp and io/SCENE_FORMAT.md for the format).
 #include "io/scene.hpp"
+
+#include "coupling/shape.hpp"
 
 #include <unistd.h>
 #include <nlohmann/json.hpp>
@@ -343,108 +345,211 @@ void readCoupling(const ObjectReader& coupling, SimulationSettings& sim) {
   sim.method = method == "global" ? CouplingMethod::Global : CouplingMethod::Local;
 }
 
-/// Reads a shape object; `particle_radius` gives the tank's default wall thickness and
-/// `folder` is the base of relative mesh paths.
-std::shared_ptr<const Shape> readShape(const ObjectReader& shape, double particle_radius,
-                                       const fs::path& folder) {
-  // Shapes of the format that this version cannot build yet get their own message.
-  if (const json& t = shape.require("type"); t == "capsule" || t == "cylinder" || t == "compound")
-    shape.at("type").fail("shape type " + t.dump() +
-                          " is not available yet (available: box, sphere, plane, tank, mesh)");
-  const std::string type = shape.choice("type", "", {"box", "sphere", "plane", "tank", "mesh"});
-  // Any exception from a shape constructor names the shape object.
-  auto build = [&](auto make) -> std::shared_ptr<const Shape> {
-    try {
-      return make();
-    } catch (const std::exception& e) {
-      shape.where().fail(e.what());
-    }
+/// Unit quaternion from "[x, y, z, w]": any finite, non-zero quaternion, normalised.
+Quat toOrientation(const Where& at, const json& j) {
+  const std::vector<double> xyzw = toNumbers(at, j, 4, kAnyNumber);
+  double largest = 0.0;
+  for (const double c : xyzw)
+    largest = std::max(largest, std::abs(c));
+  if (largest == 0.0) at.fail("must be a non-zero quaternion [x, y, z, w] (got [0, 0, 0, 0])");
+  // Scaled first so that neither huge nor tiny components overflow the norm.
+  const Quat q(xyzw[3] / largest, xyzw[0] / largest, xyzw[1] / largest, xyzw[2] / largest);
+  return q.normalized();  // Eigen's constructor order is (w, x, y, z)
+}
+
+/// Reads an optional "position" and "orientation" pair into a pose.
+Pose readPose(const ObjectReader& object) {
+  Pose pose;
+  pose.position = object.vec3("position", Vec3::Zero());
+  if (const json* q = object.find("orientation"))
+    pose.orientation = toOrientation(object.at("orientation"), *q);
+  return pose;
+}
+
+/// True when the points span a volume: they neither coincide nor lie on one line or one
+/// plane (up to a relative 1e-9 of their extent). Picks a far point b from a = p[0], the
+/// point c farthest from the line ab, then looks for a point off the plane abc.
+bool spansVolume(const std::vector<Vec3>& p) {
+  const Vec3& a = p[0];
+  auto farthest = [&p](auto distance) {
+    std::size_t best = 0;
+    double best_distance = 0.0;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (const double d = distance(p[i]); d > best_distance) {
+        best = i;
+        best_distance = d;
+      }
+    return std::make_pair(best, best_distance);
   };
-  if (type == "box") {
-    shape.allowOnly({"type", "half_extents"});
-    const Vec3 half = shape.vec3("half_extents", kPositive);
-    return build([&] { return makeBox(half); });
-  }
-  if (type == "sphere") {
-    shape.allowOnly({"type", "radius"});
-    const double radius = shape.number("radius", kPositive);
-    return build([&] { return makeSphere(radius); });
-  }
-  if (type == "plane") {
+  const auto [b, extent] = farthest([&](const Vec3& x) { return (x - a).norm(); });
+  if (!(extent > 0.0)) return false;
+  const double tolerance = 1e-9 * extent;
+  const Vec3 u = (p[b] - a) / extent;
+  const auto [c, off_line] =
+      farthest([&](const Vec3& x) { return ((x - a) - u * u.dot(x - a)).norm(); });
+  if (off_line <= tolerance) return false;
+  const Vec3 n = u.cross(p[c] - a).normalized();
+  const auto off_plane = farthest([&](const Vec3& x) { return std::abs(n.dot(x - a)); });
+  return off_plane.second > tolerance;
+}
+
+/// Optional Bullet collision margin: >= 0 m, or -1 (automatic) when absent.
+double readMargin(const ObjectReader& shape) {
+  return shape.number("margin", -1.0, kNonNegative);
+}
+
+/// Reads a shape object. `kind` is the body's kind ("static", ...): planes and tanks are
+/// for static bodies only. `child` marks a compound's child, which may not be a plane, a
+/// tank or a compound. `folder` is the base of relative mesh paths.
+ShapeSpec readShape(const ObjectReader& shape, const std::string& kind, bool child,
+                    const fs::path& folder) {
+  ShapeSpec s;
+  shape.require("type");
+  s.type = shape.choice("type", "",
+                        {"box", "sphere", "capsule", "cylinder", "cone", "convex_hull", "plane",
+                         "tank", "mesh", "compound"});
+  const bool static_only = s.type == "plane" || s.type == "tank";
+  if (child && (static_only || s.type == "compound"))
+    shape.at("type").fail(
+        "a compound's child cannot be a " + s.type +
+        " (allowed: \"box\", \"sphere\", \"capsule\", \"cylinder\", \"cone\", \"convex_hull\", "
+        "\"mesh\")");
+  if (static_only && kind != "static")
+    shape.at("type").fail("a " + s.type + " is only allowed on a static body (this body is " +
+                          kind + ")");
+
+  if (s.type == "box") {
+    shape.allowOnly({"type", "half_extents", "margin"});
+    s.half_extents = shape.vec3("half_extents", kPositive);
+  } else if (s.type == "sphere") {
+    shape.allowOnly({"type", "radius", "margin"});
+    s.radius = shape.number("radius", kPositive);
+  } else if (s.type == "capsule") {
+    shape.allowOnly({"type", "radius", "height", "margin"});
+    s.radius = shape.number("radius", kPositive);
+    s.height = shape.number("height", kNonNegative);
+  } else if (s.type == "cylinder" || s.type == "cone") {
+    shape.allowOnly({"type", "radius", "height", "margin"});
+    s.radius = shape.number("radius", kPositive);
+    s.height = shape.number("height", kPositive);
+  } else if (s.type == "convex_hull") {
+    shape.allowOnly({"type", "points", "margin"});
+    const Where points_at = shape.at("points");
+    const json& points = requireArray(points_at, shape.require("points"));
+    if (points.size() < 4)
+      points_at.fail("a convex hull needs at least 4 points (got " + std::to_string(points.size()) +
+                     ")");
+    for (std::size_t i = 0; i < points.size(); ++i)
+      s.points.push_back(toVec3(points_at.index(i), points[i], kAnyNumber));
+    if (!spansVolume(s.points))
+      points_at.fail("the points must span a volume (they all lie in one plane)");
+  } else if (s.type == "plane") {
     shape.allowOnly({"type", "normal", "offset"});
     const Vec3 normal = shape.vec3("normal");
     if (normal.norm() < 1e-12) shape.at("normal").fail("must be a non-zero vector (got [0, 0, 0])");
-    const double offset = shape.number("offset", 0.0, kAnyNumber);
-    return build([&] { return makePlane(normal, offset); });
-  }
-  if (type == "tank") {
+    s.normal = normal.normalized();
+    s.offset = shape.number("offset", 0.0, kAnyNumber);
+  } else if (s.type == "tank") {
     shape.allowOnly({"type", "min", "max", "wall_thickness"});
     const Aabb cavity = shape.box("min", "max");
-    // Default: two lattice spacings (spacing = 2 * particle_radius).
-    const double wall = shape.number("wall_thickness", 4.0 * particle_radius, kPositive);
-    return build([&] { return makeTank(cavity.min, cavity.max, wall); });
-  }
-  if (type == "mesh") {
+    s.min = cavity.min;
+    s.max = cavity.max;
+    s.wall_thickness = shape.number("wall_thickness", 0.0, kPositive);  // 0: automatic
+  } else if (s.type == "mesh") {
     shape.allowOnly({"type", "file", "scale"});
     const Where file_at = shape.at("file");
     const std::string name = shape.string("file");
     if (name.empty()) file_at.fail("must name an OBJ file");
-    const fs::path file = fs::path(name).is_absolute() ? fs::path(name) : folder / name;
-    Vec3 scale = Vec3::Ones();
-    if (const json* s = shape.find("scale"))
-      scale = s->is_array() ? toVec3(shape.at("scale"), *s, kPositive)
-                            : Vec3::Constant(toNumber(shape.at("scale"), *s, kPositive));
+    if (const json* scale = shape.find("scale"))
+      s.scale = scale->is_array() ? toVec3(shape.at("scale"), *scale, kPositive)
+                                  : Vec3::Constant(toNumber(shape.at("scale"), *scale, kPositive));
+    fs::path file = fs::path(name).is_absolute() ? fs::path(name) : folder / name;
     std::error_code ec;
+    if (const fs::path absolute = fs::absolute(file, ec); !ec) file = absolute.lexically_normal();
     if (!fs::is_regular_file(file, ec))
       file_at.fail("mesh file not found: " + file.string() +
                    " (relative paths are relative to the scene file's folder)");
+    s.file = file.string();
     try {
-      return makeMesh(file.string(), scale);
+      makeMesh(s.file, s.scale);  // loads now, so that a broken file is bad input
     } catch (const std::exception& e) {
       file_at.fail(e.what());
     }
+  } else if (s.type == "compound") {
+    shape.allowOnly({"type", "children", "margin"});
+    const Where children_at = shape.at("children");
+    const json& children = requireArray(children_at, shape.require("children"));
+    if (children.empty()) children_at.fail("must list at least one child {shape, position, ...}");
+    for (std::size_t i = 0; i < children.size(); ++i) {
+      const ObjectReader child_object(children_at.index(i), children[i]);
+      child_object.allowOnly({"shape", "position", "orientation"});
+      ShapeChild c;
+      c.shape = readShape(child_object.object("shape"), kind, true, folder);
+      c.pose = readPose(child_object);
+      s.children.push_back(std::move(c));
+    }
   }
-  shape.at("type").fail("must be given");  // unreachable: choice() checked the type
+  if (s.type != "plane" && s.type != "tank" && s.type != "mesh") s.margin = readMargin(shape);
+  // A compound's margin is the default of its children that give none (meshes have none).
+  for (ShapeChild& c : s.children)
+    if (c.shape.margin < 0.0 && c.shape.type != "mesh") c.shape.margin = s.margin;
+  return s;
 }
 
-BodySettings readBody(const ObjectReader& body, double particle_radius, const fs::path& folder) {
+BodySpec readBody(const ObjectReader& body, const fs::path& folder) {
   body.allowOnly({"name", "kind", "slip", "restitution", "position", "orientation", "shape",
                   "density", "mass", "coupling", "linear_velocity", "angular_velocity",
                   "friction"});
-  BodySettings b;
+  BodySpec b;
   b.name = body.string("name");
   checkName(body.at("name"), b.name);
   const std::string kind = body.choice("kind", "static", {"static", "kinematic", "dynamic"});
-  if (kind != "static")
-    body.at("kind").fail(kind + " bodies need the Bullet bridge, not available in this version " +
-                         "(use \"static\")");
-  b.kind = BodyKind::Static;
+  b.kind = kind == "dynamic"     ? BodyKind::Dynamic
+           : kind == "kinematic" ? BodyKind::Kinematic
+                                 : BodyKind::Static;
+  const bool dynamic = b.kind == BodyKind::Dynamic;
+
+  if (dynamic) {
+    b.coupling = body.choice("coupling", "two_way", {"two_way", "one_way"}) == "one_way"
+                     ? CouplingMode::OneWay
+                     : CouplingMode::TwoWay;
+    const bool has_density = body.find("density") != nullptr;
+    const bool has_mass = body.find("mass") != nullptr;
+    if (has_density && has_mass) body.at("mass").fail("give either density or mass, not both");
+    if (!has_density && !has_mass)
+      body.at("density").fail("missing: a dynamic body needs either density (kg/m^3) or mass (kg)");
+    if (has_density) b.density = body.number("density", kPositive);
+    if (has_mass) b.mass = body.number("mass", kPositive);
+  } else {
+    if (body.choice("coupling", "one_way", {"two_way", "one_way"}) == "two_way")
+      body.at("coupling")
+          .fail("static and kinematic bodies are always one-way (this body is " + kind +
+                "); use \"one_way\", leave the field out, or make the body dynamic");
+    b.coupling = CouplingMode::OneWay;
+    for (const char* key : {"density", "mass"})
+      if (body.find(key))
+        body.at(key).fail(std::string("only dynamic bodies take a ") + key + " (this body is " +
+                          kind + ")");
+  }
+
   b.slip = body.number("slip", 0.0, kUnitInterval);
   b.restitution = body.number("restitution", 0.0, kUnitInterval);
-  b.pose.position = body.vec3("position", Vec3::Zero());
-  if (const json* q = body.find("orientation")) {
-    const std::vector<double> xyzw = toNumbers(body.at("orientation"), *q, 4, kAnyNumber);
-    const Quat orientation(xyzw[3], xyzw[0], xyzw[1], xyzw[2]);  // Eigen: (w, x, y, z)
-    if (orientation.norm() < 1e-12)
-      body.at("orientation").fail("must be a non-zero quaternion [x, y, z, w] (got [0, 0, 0, 0])");
-    b.pose.orientation = orientation.normalized();
-  }
-  // Used from the Bullet version on (dynamic bodies); validated now so scenes stay valid.
-  if (body.find("density") && body.find("mass"))
-    body.at("mass").fail("give either density or mass, not both");
-  body.number("density", 1.0, kPositive);
-  body.number("mass", 1.0, kPositive);
-  body.number("friction", 0.0, kNonNegative);
-  body.choice("coupling", "two_way", {"two_way", "one_way"});
-  body.vec3("linear_velocity", Vec3::Zero());
-  body.vec3("angular_velocity", Vec3::Zero());
+  b.friction = body.number("friction", 0.5, kNonNegative);
+  b.pose = readPose(body);
+  b.linear_velocity = body.vec3("linear_velocity", Vec3::Zero());
+  b.angular_velocity = body.vec3("angular_velocity", Vec3::Zero());
+  if (b.kind == BodyKind::Static)
+    for (const char* key : {"linear_velocity", "angular_velocity"})
+      if (const Vec3 v = body.vec3(key, Vec3::Zero()); v != Vec3::Zero())
+        body.at(key).fail("a static body never moves: must be [0, 0, 0] (got " + formatVec3(v) +
+                          "); use kind \"kinematic\" for a body that moves");
 
-  b.shape = readShape(body.object("shape"), particle_radius, folder);
+  b.shape = readShape(body.object("shape"), kind, false, folder);
   return b;
 }
 
-void readBodies(const Where& at, const json& list, double particle_radius, const fs::path& folder,
-                SimulationSettings& sim) {
+void readBodies(const Where& at, const json& list, const fs::path& folder,
+                std::vector<BodySpec>& bodies) {
   requireArray(at, list);
   std::map<std::string, std::size_t> index_of_name;
   for (std::size_t i = 0; i < list.size(); ++i) {
@@ -456,7 +561,7 @@ void readBodies(const Where& at, const json& list, double particle_radius, const
         body.at("name").fail("duplicate body name \"" + it->first + "\" (also bodies[" +
                              std::to_string(it->second) + "])");
     }
-    sim.bodies.push_back(readBody(body, particle_radius, folder));
+    bodies.push_back(readBody(body, folder));
   }
 }
 
@@ -491,9 +596,9 @@ SceneFile parseScene(const std::string& json_text, const std::string& path) {
     domain->allowOnly({"min", "max"});
     scene.sim.domain = domain->box("min", "max");
   }
+  // sim.bodies stays empty: the runner builds the bodies from scene.bodies through Bullet.
   if (const json* bodies = root.find("bodies"))
-    readBodies(root.at("bodies"), *bodies, scene.sim.fluid.particle_radius,
-               fs::path(path).parent_path(), scene.sim);
+    readBodies(root.at("bodies"), *bodies, fs::path(path).parent_path(), scene.bodies);
   return scene;
 }
 

@@ -1,4 +1,5 @@
-// Scene files (DESIGN.md §7): JSON in, validated SimulationSettings out.
+// Scene files (DESIGN.md §7): JSON in, validated SimulationSettings and body descriptions
+// (BodySpec, for the Bullet bridge) out.
 //
 // The loader is the boundary where user input enters Wake, so it checks everything:
 // types, finiteness, ranges, unknown (misspelt) fields, duplicate keys, missing mesh
@@ -8,10 +9,12 @@
 // The field reference, with units, defaults and ranges, is io/SCENE_FORMAT.md.
 #pragma once
 
+#include "bullet_bridge/body_spec.hpp"
 #include "coupling/simulation.hpp"
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace wake {
 
@@ -26,9 +29,11 @@ class SceneError : public std::runtime_error {
 struct SceneFile {
   std::string name;        ///< scene name, also the output file stem (<name>.h5)
   std::string path;        ///< the scene file as given by the user
-  SimulationSettings sim;  ///< validated settings; fluid.speed_of_sound 0 means "auto"
-  double end_time = 0;     ///< s, > 0: the run stops here (last output frame)
-  double frame_rate = 30;  ///< 1/s, > 0: output frames per simulated second
+  SimulationSettings sim;  ///< validated settings; fluid.speed_of_sound 0 means "auto";
+                           ///< sim.bodies is left empty (the runner builds them from `bodies`)
+  std::vector<BodySpec> bodies;  ///< validated bodies, in file order; mesh files absolute
+  double end_time = 0;           ///< s, > 0: the run stops here (last output frame)
+  double frame_rate = 30;        ///< 1/s, > 0: output frames per simulated second
 };
 
 /// Reads and validates a scene file. Throws SceneError (one line, naming the field).

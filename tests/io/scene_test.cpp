@@ -7,6 +7,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <functional>
 #include <string>
 
@@ -14,6 +15,7 @@ namespace wake {
 namespace {
 
 using json = nlohmann::json;
+namespace fs = std::filesystem;
 
 const std::string kScenes = std::string(WAKE_TEST_DATA_DIR) + "/scenes/";
 
@@ -36,14 +38,21 @@ TEST(SceneLoader, SmallDambreak) {
   EXPECT_EQ(s.sim.blocks[0].max, Vec3(0.1, 0.2, 0.1));
   EXPECT_EQ(s.sim.method, CouplingMethod::Local);
   EXPECT_TRUE(s.sim.domain.empty());
-  ASSERT_EQ(s.sim.bodies.size(), 1u);
-  const BodySettings& tank = s.sim.bodies[0];
+  EXPECT_TRUE(s.sim.bodies.empty());  // the runner builds bodies from s.bodies
+  ASSERT_EQ(s.bodies.size(), 1u);
+  const BodySpec& tank = s.bodies[0];
   EXPECT_EQ(tank.name, "tank");
   EXPECT_EQ(tank.kind, BodyKind::Static);
-  ASSERT_TRUE(tank.shape);
-  EXPECT_STREQ(tank.shape->typeName(), "tank");
+  EXPECT_EQ(tank.coupling, CouplingMode::OneWay);
+  EXPECT_EQ(tank.shape.type, "tank");
+  EXPECT_EQ(tank.shape.min, Vec3(0, 0, 0));
+  EXPECT_EQ(tank.shape.max, Vec3(0.4, 0.3, 0.1));
+  EXPECT_EQ(tank.shape.wall_thickness, 0.0);  // automatic
   EXPECT_EQ(tank.slip, 0.0);
   EXPECT_EQ(tank.restitution, 0.0);
+  EXPECT_EQ(tank.friction, 0.5);
+  EXPECT_EQ(tank.mass, 0.0);
+  EXPECT_EQ(tank.density, 0.0);
   // 5 x 10 x 5 particles at spacing 0.02 m.
   EXPECT_DOUBLE_EQ(estimateFluidParticles(s.sim), 250.0);
   EXPECT_EQ(frameCount(s), 5u);
@@ -52,9 +61,54 @@ TEST(SceneLoader, SmallDambreak) {
   EXPECT_EQ(frameTime(s, 5), 0.05);
 }
 
-TEST(SceneLoader, AllStaticShapesAndDefaults) {
-  const SceneFile s = loadScene(kScenes + "all_static_shapes.json");
-  EXPECT_EQ(s.name, "all_static_shapes");  // default: the file's stem
+/// One body of every shape type and every kind; a mesh path relative to the scene file.
+const char* const kEveryShape = R"({
+  "description": "every shape type and every kind of body",
+  "time": { "end": 0.1 },
+  "fluid": { "particle_radius": 0.01, "speed_of_sound": 20, "smoothing_ratio": 1.2,
+             "blocks": [ { "min": [0.02, 0.02, 0.02], "max": [0.2, 0.2, 0.18] } ] },
+  "coupling": { "method": "global" },
+  "domain": { "min": [-0.1, -0.1, -0.1], "max": [0.6, 0.6, 0.3] },
+  "bodies": [
+    { "name": "tank", "kind": "static", "slip": 1.0, "restitution": 0.5, "friction": 0.2,
+      "shape": { "type": "tank", "min": [0, 0, 0], "max": [0.5, 0.4, 0.2],
+                 "wall_thickness": 0.03 } },
+    { "name": "floor", "coupling": "one_way",
+      "shape": { "type": "plane", "normal": [0, 2, 0], "offset": -0.05 } },
+    { "name": "block", "kind": "dynamic", "density": 500, "coupling": "one_way",
+      "position": [0.35, 0.05, 0.1], "orientation": [0, 0, 1, 1], "friction": 0.8,
+      "shape": { "type": "box", "half_extents": [0.03, 0.05, 0.03], "margin": 0.002 } },
+    { "name": "ball", "kind": "dynamic", "mass": 2, "linear_velocity": [1, 0, 0],
+      "angular_velocity": [0, 0, 3], "shape": { "type": "sphere", "radius": 0.04 } },
+    { "name": "pill", "kind": "kinematic", "linear_velocity": [0, -0.5, 0],
+      "angular_velocity": [0, 1, 0],
+      "shape": { "type": "capsule", "radius": 0.02, "height": 0 } },
+    { "name": "can", "kind": "dynamic", "density": 800,
+      "shape": { "type": "cylinder", "radius": 0.03, "height": 0.1, "margin": 0 } },
+    { "name": "cone", "kind": "kinematic", "coupling": "one_way",
+      "shape": { "type": "cone", "radius": 0.03, "height": 0.06 } },
+    { "name": "gem", "kind": "dynamic", "mass": 0.1,
+      "shape": { "type": "convex_hull",
+                 "points": [[0, 0, 0], [0.05, 0, 0], [0, 0.05, 0], [0, 0, 0.05],
+                            [0.01, 0.01, 0.01]] } },
+    { "name": "cube", "position": [0.42, 0.3, 0.1],
+      "shape": { "type": "mesh", "file": "meshes/cube.obj", "scale": 0.02 } },
+    { "name": "hull", "kind": "dynamic", "density": 300,
+      "shape": { "type": "mesh", "file": "meshes/../meshes/cube.obj",
+                 "scale": [0.1, 0.02, 0.05] } },
+    { "name": "raft", "kind": "dynamic", "density": 400,
+      "shape": { "type": "compound", "margin": 0.001, "children": [
+        { "shape": { "type": "box", "half_extents": [0.1, 0.01, 0.05], "margin": 0.003 } },
+        { "shape": { "type": "sphere", "radius": 0.02 }, "position": [0.1, 0.02, 0],
+          "orientation": [0, 2, 0, 0] },
+        { "shape": { "type": "mesh", "file": "meshes/cube.obj", "scale": 0.01 },
+          "position": [-0.1, 0.02, 0] } ] } }
+  ]
+})";
+
+TEST(SceneLoader, EveryShapeAndKindAndDefaults) {
+  const SceneFile s = parseScene(kEveryShape, kScenes + "every_shape.json");
+  EXPECT_EQ(s.name, "every_shape");  // default: the file's stem
   EXPECT_DOUBLE_EQ(s.frame_rate, 30.0);
   EXPECT_EQ(s.sim.gravity, Vec3(0, -9.81, 0));
   EXPECT_DOUBLE_EQ(s.sim.fluid.speed_of_sound, 20.0);
@@ -62,24 +116,105 @@ TEST(SceneLoader, AllStaticShapesAndDefaults) {
   EXPECT_EQ(s.sim.method, CouplingMethod::Global);
   EXPECT_EQ(s.sim.domain.min, Vec3(-0.1, -0.1, -0.1));
   EXPECT_EQ(s.sim.domain.max, Vec3(0.6, 0.6, 0.3));
-  ASSERT_EQ(s.sim.bodies.size(), 5u);
-  const char* types[] = {"tank", "box", "sphere", "plane", "mesh"};
-  for (std::size_t i = 0; i < 5; ++i) {
-    ASSERT_TRUE(s.sim.bodies[i].shape) << i;
-    EXPECT_STREQ(s.sim.bodies[i].shape->typeName(), types[i]);
+  EXPECT_TRUE(s.sim.bodies.empty());
+
+  ASSERT_EQ(s.bodies.size(), 11u);
+  const char* types[] = {"tank", "plane",       "box",  "sphere", "capsule", "cylinder",
+                         "cone", "convex_hull", "mesh", "mesh",   "compound"};
+  const BodyKind kinds[] = {BodyKind::Static,    BodyKind::Static,    BodyKind::Dynamic,
+                            BodyKind::Dynamic,   BodyKind::Kinematic, BodyKind::Dynamic,
+                            BodyKind::Kinematic, BodyKind::Dynamic,   BodyKind::Static,
+                            BodyKind::Dynamic,   BodyKind::Dynamic};
+  for (std::size_t i = 0; i < s.bodies.size(); ++i) {
+    EXPECT_EQ(s.bodies[i].shape.type, types[i]) << i;
+    EXPECT_EQ(s.bodies[i].kind, kinds[i]) << i;
   }
-  EXPECT_EQ(s.sim.bodies[0].slip, 1.0);
-  EXPECT_EQ(s.sim.bodies[0].restitution, 0.5);
-  const Quat q = s.sim.bodies[1].pose.orientation;  // [0, 0, 1, 1] normalised
+
+  const BodySpec& tank = s.bodies[0];
+  EXPECT_EQ(tank.name, "tank");
+  EXPECT_EQ(tank.slip, 1.0);
+  EXPECT_EQ(tank.restitution, 0.5);
+  EXPECT_EQ(tank.friction, 0.2);
+  EXPECT_EQ(tank.coupling, CouplingMode::OneWay);
+  EXPECT_EQ(tank.shape.wall_thickness, 0.03);
+  EXPECT_EQ(tank.shape.max, Vec3(0.5, 0.4, 0.2));
+
+  const ShapeSpec& floor = s.bodies[1].shape;  // normal normalised
+  EXPECT_EQ(floor.normal, Vec3(0, 1, 0));
+  EXPECT_EQ(floor.offset, -0.05);
+
+  const BodySpec& block = s.bodies[2];
+  EXPECT_EQ(block.coupling, CouplingMode::OneWay);
+  EXPECT_EQ(block.density, 500.0);
+  EXPECT_EQ(block.mass, 0.0);
+  EXPECT_EQ(block.friction, 0.8);
+  EXPECT_EQ(block.pose.position, Vec3(0.35, 0.05, 0.1));
+  const Quat q = block.pose.orientation;  // [0, 0, 1, 1] normalised
   EXPECT_NEAR(q.norm(), 1.0, 1e-15);
   EXPECT_NEAR(q.z(), std::sqrt(0.5), 1e-15);
   EXPECT_NEAR(q.w(), std::sqrt(0.5), 1e-15);
-  EXPECT_EQ(s.sim.bodies[1].pose.position, Vec3(0.35, 0.05, 0.1));
-  // The plane's normal is normalised by makePlane: y = -0.05 lies on the surface.
-  EXPECT_NEAR(s.sim.bodies[3].shape->signedDistance(Vec3(0, -0.05, 0)), 0.0, 1e-12);
-  // The mesh (a cube of half size 0.02 m) is found relative to the scene file.
-  EXPECT_TRUE(s.sim.bodies[4].shape->contains(Vec3(0.019, 0, 0)));
-  EXPECT_FALSE(s.sim.bodies[4].shape->contains(Vec3(0.021, 0, 0)));
+  EXPECT_EQ(block.shape.half_extents, Vec3(0.03, 0.05, 0.03));
+  EXPECT_EQ(block.shape.margin, 0.002);
+
+  const BodySpec& ball = s.bodies[3];
+  EXPECT_EQ(ball.coupling, CouplingMode::TwoWay);  // default of dynamic bodies
+  EXPECT_EQ(ball.mass, 2.0);
+  EXPECT_EQ(ball.density, 0.0);
+  EXPECT_EQ(ball.friction, 0.5);
+  EXPECT_EQ(ball.linear_velocity, Vec3(1, 0, 0));
+  EXPECT_EQ(ball.angular_velocity, Vec3(0, 0, 3));
+  EXPECT_EQ(ball.shape.radius, 0.04);
+  EXPECT_EQ(ball.shape.margin, -1.0);  // automatic
+
+  const BodySpec& pill = s.bodies[4];
+  EXPECT_EQ(pill.coupling, CouplingMode::OneWay);  // kinematic: always one-way
+  EXPECT_EQ(pill.linear_velocity, Vec3(0, -0.5, 0));
+  EXPECT_EQ(pill.angular_velocity, Vec3(0, 1, 0));
+  EXPECT_EQ(pill.shape.radius, 0.02);
+  EXPECT_EQ(pill.shape.height, 0.0);
+
+  EXPECT_EQ(s.bodies[5].shape.radius, 0.03);
+  EXPECT_EQ(s.bodies[5].shape.height, 0.1);
+  EXPECT_EQ(s.bodies[5].shape.margin, 0.0);
+  EXPECT_EQ(s.bodies[6].shape.height, 0.06);
+  EXPECT_EQ(s.bodies[6].coupling, CouplingMode::OneWay);
+
+  const ShapeSpec& gem = s.bodies[7].shape;
+  ASSERT_EQ(gem.points.size(), 5u);
+  EXPECT_EQ(gem.points[3], Vec3(0, 0, 0.05));
+
+  // Mesh files: absolute, normalised, relative to the scene file's folder.
+  const std::string cube = (fs::path(kScenes) / "meshes" / "cube.obj").lexically_normal().string();
+  EXPECT_EQ(s.bodies[8].shape.file, cube);
+  EXPECT_EQ(s.bodies[8].shape.scale, Vec3::Constant(0.02));
+  EXPECT_EQ(s.bodies[8].pose.position, Vec3(0.42, 0.3, 0.1));
+  EXPECT_EQ(s.bodies[9].shape.file, cube);
+  EXPECT_EQ(s.bodies[9].shape.scale, Vec3(0.1, 0.02, 0.05));
+
+  const ShapeSpec& raft = s.bodies[10].shape;
+  EXPECT_EQ(raft.margin, 0.001);
+  ASSERT_EQ(raft.children.size(), 3u);
+  EXPECT_EQ(raft.children[0].shape.type, "box");
+  EXPECT_EQ(raft.children[0].pose.position, Vec3::Zero());
+  EXPECT_EQ(raft.children[0].shape.margin, 0.003);  // its own
+  EXPECT_EQ(raft.children[0].shape.half_extents, Vec3(0.1, 0.01, 0.05));
+  EXPECT_EQ(raft.children[1].shape.type, "sphere");
+  EXPECT_EQ(raft.children[1].shape.margin, 0.001);  // the compound's
+  EXPECT_EQ(raft.children[1].pose.position, Vec3(0.1, 0.02, 0));
+  EXPECT_NEAR(raft.children[1].pose.orientation.y(), 1.0, 1e-15);  // [0, 2, 0, 0] normalised
+  EXPECT_EQ(raft.children[2].shape.type, "mesh");
+  EXPECT_EQ(raft.children[2].shape.file, cube);
+  EXPECT_EQ(raft.children[2].shape.scale, Vec3::Constant(0.01));
+  EXPECT_EQ(raft.children[2].shape.margin, -1.0);  // meshes take no margin
+}
+
+TEST(SceneLoader, MeshPathOfARelativeSceneFileBecomesAbsolute) {
+  const std::string relative = fs::relative(fs::path(kScenes) / "every_shape.json").string();
+  ASSERT_FALSE(fs::path(relative).is_absolute());
+  const SceneFile s = parseScene(kEveryShape, relative);
+  const fs::path file = s.bodies[8].shape.file;
+  EXPECT_TRUE(file.is_absolute()) << file;
+  EXPECT_TRUE(fs::equivalent(file, fs::path(kScenes) / "meshes" / "cube.obj")) << file;
 }
 
 TEST(SceneLoader, FrameTimesEndOnEndTime) {
@@ -159,6 +294,22 @@ json box(double half) {
   return {{"type", "box"}, {"half_extents", {half, half, half}}};
 }
 
+/// A dynamic body with a box shape and the given extra fields (mass, density, coupling).
+json dynamicBox(const char* name, const json& extra) {
+  json body = {{"name", name}, {"kind", "dynamic"}, {"shape", box(0.05)}};
+  body.update(extra);
+  return body;
+}
+
+/// A static body with a convex hull of the given points.
+json hull(const json& points) {
+  return {{"name", "h"}, {"shape", {{"type", "convex_hull"}, {"points", points}}}};
+}
+
+json compound(const json& children) {
+  return {{"type", "compound"}, {"children", children}};
+}
+
 const BadCase kBadCases[] = {
     {"negative radius", [](json& s) { s["fluid"]["particle_radius"] = -0.01; },
      "fluid.particle_radius: ", "must be > 0 (got -0.01)"},
@@ -219,14 +370,9 @@ const BadCase kBadCases[] = {
      "bodies[0].restitution: ", "in [0, 1]"},
     {"unknown shape type",
      [](json& s) {
-       s["bodies"][0]["shape"] = {{"type", "cone"}};
+       s["bodies"][0]["shape"] = {{"type", "torus"}};
      },
-     "bodies[0].shape.type: ", "\"cone\""},
-    {"capsule not yet",
-     [](json& s) {
-       s["bodies"][0]["shape"] = {{"type", "capsule"}, {"radius", 1}};
-     },
-     "bodies[0].shape.type: ", "not available yet"},
+     "bodies[0].shape.type: ", "\"torus\""},
     {"shape without type", [](json& s) { s["bodies"][0]["shape"].erase("type"); },
      "bodies[0].shape.type: ", "required"},
     {"missing mesh file",
@@ -266,20 +412,210 @@ const BadCase kBadCases[] = {
      "bodies[0].name: ", "required"},
     {"body name with a slash", [](json& s) { s["bodies"][0]["name"] = "a/b"; },
      "bodies[0].name: ", "'/'"},
-    {"dynamic body", [](json& s) { s["bodies"][0]["kind"] = "dynamic"; },
-     "bodies[0].kind: ", "need the Bullet bridge"},
+    {"unknown kind", [](json& s) { s["bodies"][0]["kind"] = "floating"; },
+     "bodies[0].kind: ", "\"floating\""},
+    {"tank on a dynamic body",
+     [](json& s) {
+       s["bodies"][0]["kind"] = "dynamic";
+       s["bodies"][0]["mass"] = 1;
+     },
+     "bodies[0].shape.type: ", "only allowed on a static body (this body is dynamic)"},
+    {"plane on a kinematic body",
+     [](json& s) {
+       s["bodies"].push_back({{"name", "p"},
+                              {"kind", "kinematic"},
+                              {"shape", {{"type", "plane"}, {"normal", {0, 1, 0}}}}});
+     },
+     "bodies[1].shape.type: ", "only allowed on a static body (this body is kinematic)"},
     {"zero quaternion",
      [](json& s) {
        s["bodies"][0]["orientation"] = {0, 0, 0, 0};
      },
      "bodies[0].orientation: ", "non-zero quaternion"},
-    {"negative mass", [](json& s) { s["bodies"][0]["mass"] = -2; }, "bodies[0].mass: ", "> 0"},
+    {"quaternion of three",
+     [](json& s) {
+       s["bodies"][0]["orientation"] = {0, 0, 1};
+     },
+     "bodies[0].orientation: ", "array of 4 numbers"},
+    {"quaternion with a string",
+     [](json& s) {
+       s["bodies"][0]["orientation"] = {0, 0, "inf", 1};
+     },
+     "bodies[0].orientation[2]: ", "must be a number"},
+    {"negative mass",
+     [](json& s) {
+       s["bodies"].push_back(dynamicBox("b", {{"mass", -2}}));
+     },
+     "bodies[1].mass: ", "> 0"},
+    {"zero density",
+     [](json& s) {
+       s["bodies"].push_back(dynamicBox("b", {{"density", 0}}));
+     },
+     "bodies[1].density: ", "> 0"},
     {"density and mass",
      [](json& s) {
-       s["bodies"][0]["mass"] = 2;
-       s["bodies"][0]["density"] = 500;
+       s["bodies"].push_back(dynamicBox("b", {{"mass", 2}, {"density", 500}}));
      },
-     "bodies[0].mass: ", "not both"},
+     "bodies[1].mass: ", "not both"},
+    {"dynamic body without density or mass",
+     [](json& s) { s["bodies"].push_back(dynamicBox("b", json::object())); },
+     "bodies[1].density: ", "needs either density (kg/m^3) or mass (kg)"},
+    {"mass of a static body", [](json& s) { s["bodies"][0]["mass"] = 2; },
+     "bodies[0].mass: ", "only dynamic bodies take a mass (this body is static)"},
+    {"density of a kinematic body",
+     [](json& s) {
+       s["bodies"].push_back(
+           {{"name", "k"}, {"kind", "kinematic"}, {"density", 500}, {"shape", box(0.1)}});
+     },
+     "bodies[1].density: ", "only dynamic bodies take a density (this body is kinematic)"},
+    {"two-way static body", [](json& s) { s["bodies"][0]["coupling"] = "two_way"; },
+     "bodies[0].coupling: ", "static and kinematic bodies are always one-way"},
+    {"two-way kinematic body",
+     [](json& s) {
+       s["bodies"].push_back(dynamicBox("b", {{"mass", 1}}));
+       s["bodies"].push_back(
+           {{"name", "k"}, {"kind", "kinematic"}, {"coupling", "two_way"}, {"shape", box(0.1)}});
+     },
+     "bodies[2].coupling: ", "always one-way (this body is kinematic)"},
+    {"unknown coupling mode",
+     [](json& s) {
+       s["bodies"].push_back(dynamicBox("b", {{"mass", 1}, {"coupling", "three_way"}}));
+     },
+     "bodies[1].coupling: ", "\"three_way\""},
+    {"moving static body",
+     [](json& s) {
+       s["bodies"][0]["linear_velocity"] = {0, 1, 0};
+     },
+     "bodies[0].linear_velocity: ", "a static body never moves"},
+    {"spinning static body",
+     [](json& s) {
+       s["bodies"][0]["angular_velocity"] = {0, 0, -2};
+     },
+     "bodies[0].angular_velocity: ", "a static body never moves"},
+    {"negative friction", [](json& s) { s["bodies"][0]["friction"] = -0.1; },
+     "bodies[0].friction: ", ">= 0"},
+    {"capsule negative height",
+     [](json& s) {
+       s["bodies"].push_back(
+           {{"name", "c"}, {"shape", {{"type", "capsule"}, {"radius", 0.1}, {"height", -1}}}});
+     },
+     "bodies[1].shape.height: ", ">= 0"},
+    {"cylinder without height",
+     [](json& s) {
+       s["bodies"].push_back({{"name", "c"}, {"shape", {{"type", "cylinder"}, {"radius", 0.1}}}});
+     },
+     "bodies[1].shape.height: ", "required"},
+    {"cone zero height",
+     [](json& s) {
+       s["bodies"].push_back(
+           {{"name", "c"}, {"shape", {{"type", "cone"}, {"radius", 0.1}, {"height", 0}}}});
+     },
+     "bodies[1].shape.height: ", "> 0"},
+    {"cone zero radius",
+     [](json& s) {
+       s["bodies"].push_back(
+           {{"name", "c"}, {"shape", {{"type", "cone"}, {"radius", 0}, {"height", 1}}}});
+     },
+     "bodies[1].shape.radius: ", "> 0"},
+    {"negative margin",
+     [](json& s) {
+       s["bodies"].push_back({{"name", "b"}, {"shape", box(0.1)}});
+       s["bodies"][1]["shape"]["margin"] = -0.01;
+     },
+     "bodies[1].shape.margin: ", ">= 0"},
+    {"margin of a tank", [](json& s) { s["bodies"][0]["shape"]["margin"] = 0.01; },
+     "bodies[0].shape.margin: ", "unknown field"},
+    {"margin of a mesh",
+     [](json& s) {
+       s["bodies"][0]["shape"] = {{"type", "mesh"}, {"file", "cube.obj"}, {"margin", 0}};
+     },
+     "bodies[0].shape.margin: ", "unknown field"},
+    {"hull of three points",
+     [](json& s) {
+       s["bodies"].push_back(hull({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}));
+     },
+     "bodies[1].shape.points: ", "at least 4 points (got 3)"},
+    {"flat hull",
+     [](json& s) {
+       s["bodies"].push_back(hull({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0.5, 2, 0}}));
+     },
+     "bodies[1].shape.points: ", "must span a volume"},
+    {"hull on a line",
+     [](json& s) {
+       s["bodies"].push_back(hull({{0, 0, 0}, {1, 1, 1}, {2, 2, 2}, {3, 3, 3}}));
+     },
+     "bodies[1].shape.points: ", "must span a volume"},
+    {"hull of one point",
+     [](json& s) {
+       s["bodies"].push_back(hull({{1, 1, 1}, {1, 1, 1}, {1, 1, 1}, {1, 1, 1}}));
+     },
+     "bodies[1].shape.points: ", "must span a volume"},
+    {"hull point of two numbers",
+     [](json& s) {
+       s["bodies"].push_back(hull({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}));
+       s["bodies"][1]["shape"]["points"][2] = {0, 1};
+     },
+     "bodies[1].shape.points[2]: ", "array of 3 numbers"},
+    {"hull points not a list",
+     [](json& s) {
+       s["bodies"].push_back(hull({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}));
+       s["bodies"][1]["shape"]["points"] = 4;
+     },
+     "bodies[1].shape.points: ", "must be an array"},
+    {"plane in a compound",
+     [](json& s) {
+       s["bodies"][0]["shape"] = compound(
+           {{{"shape", {{"type", "plane"}, {"normal", {0, 1, 0}}}}}, {{"shape", box(0.1)}}});
+     },
+     "bodies[0].shape.children[0].shape.type: ", "a compound's child cannot be a plane"},
+    {"tank in a compound",
+     [](json& s) {
+       s["bodies"][0]["shape"] =
+           compound({{{"shape", box(0.1)}}, {{"shape", s["bodies"][0]["shape"]}}});
+     },
+     "bodies[0].shape.children[1].shape.type: ", "a compound's child cannot be a tank"},
+    {"nested compound",
+     [](json& s) {
+       s["bodies"].push_back(dynamicBox("b", {{"mass", 1}}));
+       s["bodies"][1]["shape"] = compound({{{"shape", compound({{{"shape", box(0.1)}}})}}});
+     },
+     "bodies[1].shape.children[0].shape.type: ", "cannot be a compound"},
+    {"empty compound",
+     [](json& s) {
+       s["bodies"].push_back({{"name", "c"}, {"shape", compound(json::array())}});
+     },
+     "bodies[1].shape.children: ", "at least one child"},
+    {"compound child without shape",
+     [](json& s) {
+       s["bodies"].push_back({{"name", "c"}, {"shape", compound({{{"position", {0, 0, 0}}}})}});
+     },
+     "bodies[1].shape.children[0].shape: ", "required"},
+    {"compound child unknown field",
+     [](json& s) {
+       s["bodies"].push_back(
+           {{"name", "c"}, {"shape", compound({{{"shape", box(0.1)}, {"velocity", {0, 0, 0}}}})}});
+     },
+     "bodies[1].shape.children[0].velocity: ", "unknown field"},
+    {"compound child zero quaternion",
+     [](json& s) {
+       s["bodies"].push_back(
+           {{"name", "c"},
+            {"shape", compound({{{"shape", box(0.1)}, {"orientation", {0, 0, 0, 0}}}})}});
+     },
+     "bodies[1].shape.children[0].orientation: ", "non-zero quaternion"},
+    {"compound child bad radius",
+     [](json& s) {
+       s["bodies"].push_back(
+           {{"name", "c"},
+            {"shape", compound({{{"shape", box(0.1)}},
+                                {{"shape", {{"type", "sphere"}, {"radius", -1}}}}})}});
+     },
+     "bodies[1].shape.children[1].shape.radius: ", "> 0"},
+    {"mesh file that is not a mesh",
+     [](json& s) {
+       s["bodies"][0]["shape"] = {{"type", "mesh"}, {"file", kScenes + "small_dambreak.json"}};
+     },
+     "bodies[0].shape.file: ", "small_dambreak.json"},
     {"bodies not a list",
      [](json& s) {
        s["bodies"] = {{"name", "x"}};
