@@ -3,6 +3,7 @@
 // the split of the step, and a state hash (equal hashes = identical results).
 //
 //   wake_bench_dambreak [--particles N] [--steps S] [--warmup W] [--threads 1,2]
+#include "bench/common.hpp"
 #include "coupling/simulation.hpp"
 
 #include <omp.h>
@@ -17,49 +18,9 @@
 #include <vector>
 
 using namespace wake;
+using namespace wake::bench;
 
 namespace {
-
-struct Options {
-  long particles = 100000;
-  int steps = 100;
-  int warmup = 20;
-  std::vector<int> threads = {1, 2};
-};
-
-[[noreturn]] void usage(const char* msg) {
-  std::fprintf(stderr,
-               "error: %s\nusage: wake_bench_dambreak [--particles N] [--steps S] "
-               "[--warmup W] [--threads 1,2]\n",
-               msg);
-  std::exit(2);
-}
-
-Options parse(int argc, char** argv) {
-  Options o;
-  for (int i = 1; i < argc; ++i) {
-    auto value = [&](const char* name) -> std::string {
-      if (i + 1 >= argc) usage((std::string(name) + " needs a value").c_str());
-      return argv[++i];
-    };
-    if (!std::strcmp(argv[i], "--particles"))
-      o.particles = std::stol(value("--particles"));
-    else if (!std::strcmp(argv[i], "--steps"))
-      o.steps = std::stoi(value("--steps"));
-    else if (!std::strcmp(argv[i], "--warmup"))
-      o.warmup = std::stoi(value("--warmup"));
-    else if (!std::strcmp(argv[i], "--threads")) {
-      o.threads.clear();
-      std::stringstream ss(value("--threads"));
-      for (std::string t; std::getline(ss, t, ',');)
-        o.threads.push_back(std::stoi(t));
-    } else
-      usage((std::string("unknown option ") + argv[i]).c_str());
-  }
-  if (o.particles < 1 || o.steps < 1 || o.warmup < 0 || o.threads.empty())
-    usage("counts must be positive");
-  return o;
-}
 
 /// Column of nx x 2nx x nx particles (spacing 1 cm) at one end of a tank 4 columns long.
 SimulationSettings damBreak(long particles) {
@@ -74,20 +35,6 @@ SimulationSettings damBreak(long particles) {
   tank.shape = makeTank(Vec3::Zero(), Vec3(4 * column.x(), 1.5 * column.y(), column.z()), 2 * s);
   set.bodies.push_back(tank);
   return set;
-}
-
-std::uint64_t stateHash(const Simulation& sim) {
-  FluidSnapshot snap;
-  sim.snapshot(snap);
-  std::uint64_t h = 1469598103934665603ull;  // FNV-1a
-  auto mix = [&](const void* data, std::size_t bytes) {
-    const unsigned char* p = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < bytes; ++i)
-      h = (h ^ p[i]) * 1099511628211ull;
-  };
-  mix(snap.position.data(), snap.position.size() * sizeof(Vec3));
-  mix(snap.velocity.data(), snap.velocity.size() * sizeof(Vec3));
-  return h;
 }
 
 }  // namespace
@@ -111,12 +58,7 @@ int main(int argc, char** argv) {
       sim.step(1e9);
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    StepTimings t = sim.timings();
-    t.neighbors -= before.neighbors;
-    t.density -= before.density;
-    t.forces -= before.forces;
-    t.boundary -= before.boundary;
-    t.integration -= before.integration;
+    const StepTimings t = since(sim.timings(), before);
     const double per_step = wall / opt.steps;
     const double ns = 1e9 * per_step / double(sim.fluidParticles());
     const double total = t.total();

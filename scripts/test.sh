@@ -1,11 +1,23 @@
 #!/usr/bin/env bash
-# Installs dependencies, builds Wake (Release) and runs the whole test suite, then runs the
-# fast unit and end-to-end tests again under AddressSanitizer + UBSan.
+# Installs dependencies, builds Wake (Release) and runs the whole test suite (including the
+# package test: install, then build an outside project with find_package(Wake)); then
+# builds against double-precision Bullet (build-f64) and runs the Bullet and package tests
+# there; then runs the fast unit and end-to-end tests again under AddressSanitizer + UBSan.
+# WAKE_SKIP_BULLET_DOUBLE=1 skips the double-precision part, WAKE_SKIP_SANITIZERS=1 the last.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 BUILD_DIR=build bash scripts/build.sh
 (cd build && ctest --output-on-failure -j 1 --timeout 1200)
+if [ "${WAKE_SKIP_BULLET_DOUBLE:-0}" != 1 ]; then
+  # Only what the tests below need: the installed targets and the Bullet test program.
+  start=$SECONDS
+  cmake -S . -B build-f64 -G Ninja -DCMAKE_BUILD_TYPE=Release -DWAKE_BULLET_DOUBLE=ON \
+    -DWAKE_BUILD_BENCH=OFF >/dev/null
+  cmake --build build-f64 --parallel "$(nproc)" --target wake_installed wake_bullet_tests
+  (cd build-f64 && ctest --output-on-failure -j 1 --timeout 1200 -L 'bullet|package')
+  echo "[wake] double-precision Bullet build and tests: $((SECONDS - start)) s"
+fi
 if [ "${WAKE_SKIP_SANITIZERS:-0}" != 1 ]; then
   BUILD_DIR=build-asan bash scripts/build.sh -DCMAKE_BUILD_TYPE=RelWithDebInfo -DWAKE_SANITIZE=ON -DWAKE_BUILD_BENCH=OFF
   (cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \

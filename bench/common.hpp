@@ -1,0 +1,88 @@
+// Shared command line and state hash of Wake's benchmarks.
+#pragma once
+
+#include "coupling/simulation.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace wake::bench {
+
+struct Options {
+  long particles = 100000;
+  int steps = 100;
+  int warmup = 20;
+  int bodies = 8;
+  std::vector<int> threads = {1, 2};
+};
+
+[[noreturn]] inline void usage(const char* program, const char* msg) {
+  std::fprintf(stderr,
+               "error: %s\nusage: %s [--particles N] [--steps S] [--warmup W] [--threads 1,2]"
+               " [--bodies B]\n",
+               msg, program);
+  std::exit(2);
+}
+
+inline Options parse(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    auto value = [&](const char* name) -> std::string {
+      if (i + 1 >= argc) usage(argv[0], (std::string(name) + " needs a value").c_str());
+      return argv[++i];
+    };
+    if (!std::strcmp(argv[i], "--particles"))
+      o.particles = std::stol(value("--particles"));
+    else if (!std::strcmp(argv[i], "--steps"))
+      o.steps = std::stoi(value("--steps"));
+    else if (!std::strcmp(argv[i], "--warmup"))
+      o.warmup = std::stoi(value("--warmup"));
+    else if (!std::strcmp(argv[i], "--bodies"))
+      o.bodies = std::stoi(value("--bodies"));
+    else if (!std::strcmp(argv[i], "--threads")) {
+      o.threads.clear();
+      std::stringstream ss(value("--threads"));
+      for (std::string t; std::getline(ss, t, ',');)
+        o.threads.push_back(std::stoi(t));
+    } else
+      usage(argv[0], (std::string("unknown option ") + argv[i]).c_str());
+  }
+  if (o.particles < 1 || o.steps < 1 || o.warmup < 0 || o.bodies < 0 || o.threads.empty())
+    usage(argv[0], "counts must be positive");
+  return o;
+}
+
+/// FNV-1a hash of the fluid's positions and velocities in id order.
+inline std::uint64_t stateHash(const Simulation& sim) {
+  FluidSnapshot snap;
+  sim.snapshot(snap);
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&](const void* data, std::size_t bytes) {
+    const unsigned char* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < bytes; ++i)
+      h = (h ^ p[i]) * 1099511628211ull;
+  };
+  mix(snap.position.data(), snap.position.size() * sizeof(Vec3));
+  mix(snap.velocity.data(), snap.velocity.size() * sizeof(Vec3));
+  return h;
+}
+
+/// Difference of two timings (after - before).
+inline StepTimings since(const StepTimings& after, const StepTimings& before) {
+  StepTimings t = after;
+  t.neighbors -= before.neighbors;
+  t.density -= before.density;
+  t.forces -= before.forces;
+  t.boundary -= before.boundary;
+  t.integration -= before.integration;
+  t.rigid -= before.rigid;
+  t.control -= before.control;
+  t.correction -= before.correction;
+  return t;
+}
+
+}  // namespace wake::bench
