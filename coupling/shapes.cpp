@@ -105,6 +105,14 @@ class BoxShape final : public Shape {
     sampleBoxSurface(-half_, half_, spacing, radius, out);
   }
 
+  double volume() const override { return 8.0 * half_.prod(); }
+
+  /// Faces 8 (ab + bc + ca); 12 edges of exterior angle pi/2: M = 2 pi (a + b + c).
+  std::optional<ConvexMeasures> convexMeasures() const override {
+    const double a = half_.x(), b = half_.y(), c = half_.z();
+    return ConvexMeasures{8.0 * (a * b + b * c + c * a), 2.0 * kPi * (a + b + c)};
+  }
+
  private:
   Vec3 half_;  ///< m, half extents, > 0
 };
@@ -136,6 +144,12 @@ class SphereShape final : public Shape {
       out.normal.push_back(normal);
       out.area.push_back(total_area / static_cast<double>(n));
     }
+  }
+
+  double volume() const override { return 4.0 / 3.0 * kPi * radius_ * radius_ * radius_; }
+
+  std::optional<ConvexMeasures> convexMeasures() const override {
+    return ConvexMeasures{4.0 * kPi * radius_ * radius_, 4.0 * kPi * radius_};
   }
 
  private:
@@ -181,6 +195,8 @@ class PlaneShape final : public Shape {
     sampleRectangle(origin + u_lo * tangent_u_ + v_lo * tangent_v_, tangent_u_, u_hi - u_lo,
                     tangent_v_, v_hi - v_lo, normal_, spacing, radius, out);
   }
+
+  double volume() const override { return std::numeric_limits<double>::infinity(); }
 
  private:
   Vec3 normal_;     ///< unit outward normal (points out of the solid)
@@ -260,6 +276,9 @@ class TankShape final : public Shape {
                     out);
     sampleRectangle(Vec3(max_.x(), top, min_.z()), ez, size.z(), ex, t_, ey, spacing, radius, out);
   }
+
+  /// Walls and floor: the outer box less the cavity below the rim.
+  double volume() const override { return (outer_max_ - outer_min_).prod() - (max_ - min_).prod(); }
 
  private:
   Vec3 min_, max_;  ///< m, cavity corners
