@@ -133,16 +133,80 @@ INSTANTIATE_TEST_SUITE_P(Ratios, Buoyancy,
                                                               CouplingMethod::Global)));
 
 TEST(Sinking, DenseBoxSinksToTheFloorAndStays) {
-  // Free slip: with no-slip walls the last two particle layers between the box and the
-  // floor are each pinned to a wall's tangential velocity and cannot drain, so the box
-  // would rest on a 2-layer film (2.3 cm here) instead of the floor.
+  // No-slip walls: the last two particle layers between the box and the floor are each
+  // pinned to a wall's tangential velocity and cannot drain, so the box comes to rest on
+  // a film of two layers (2 spacings = 2 cm here), not on the bare floor.
   for (CouplingMethod method : {CouplingMethod::Local, CouplingMethod::Global}) {
-    const Floating f = floatBox(2.0, method, 1.0, /*slip=*/1.0);
-    // Resting on the tank floor (Bullet's contact; its margin lies inside the box).
-    EXPECT_NEAR(f.bottom, 0.0, 0.002) << name(method);
+    const Floating f = floatBox(2.0, method, 1.0);
+    EXPECT_LT(f.bottom, 2.5 * 2 * kRadius) << name(method);
     EXPECT_LT(f.speed, 0.02) << name(method);
     EXPECT_EQ(f.max_penetrating, 0u);
   }
+}
+
+/// Depth (m) below the surface a sphere (r = 3 cm, 3000 kg/m^3) dropped from 1 cm above
+/// 25 cm of fluid has reached after 0.25 s.
+double sphereDepth(double viscosity) {
+  const Vec3 size(0.16, 0.35, 0.16);
+  const double depth = 0.25, radius = 0.03;
+  SimulationSettings sim = fluidBox(Vec3(size.x(), depth, size.z()), CouplingMethod::Local, viscosity);
+  BodySpec ball;
+  ball.name = "ball";
+  ball.kind = BodyKind::Dynamic;
+  ball.shape.type = "sphere";
+  ball.shape.radius = radius;
+  ball.density = 3000;
+  ball.pose.position = Vec3(0.08, depth + radius + 0.01, 0.08);
+  SceneWorld world(sim, {tank(size), ball});
+  world.coupled().advanceTo(0.25);
+  const double y = world.simulation().bodyStates()[1].position.y();
+  std::printf("[ drag ] viscosity %.1f: sphere centre %.4f m below the initial surface, "
+              "max_penetrating %zu\n",
+              viscosity, depth - y, world.simulation().maxPenetrating());
+  EXPECT_EQ(world.simulation().maxPenetrating(), 0u);
+  return depth - y;
+}
+
+TEST(Drag, SphereSinksDeeperInLessViscousFluid) {
+  const double thin = sphereDepth(0.1), thick = sphereDepth(3.0);
+  EXPECT_GT(thin, thick + 0.005);
+  EXPECT_GT(thin, 0.0);  // it did enter the fluid
+}
+
+TEST(BodyContact, BoxStaysStackedOnAHeavierBoxUnderWater) {
+  const Vec3 size(0.24, 0.25, 0.16);
+  SimulationSettings sim = fluidBox(Vec3(size.x(), 0.15, size.z()), CouplingMethod::Global);
+  const Vec3 bottom_half(0.06, 0.03, 0.05), top_half(0.04, 0.02, 0.04);
+  const Vec3 bottom_at(0.12, 0.03, 0.08), top_at(0.12, 0.08, 0.08);
+  std::vector<BodySpec> bodies = {tank(size), box("bottom", bottom_half, 3000, bottom_at),
+                                  box("top", top_half, 2000, top_at)};
+  SceneWorld world(sim, bodies);
+  std::size_t between = 0;
+  for (double t = 0.01; t < 0.6 + 1e-9; t += 0.01) {
+    world.coupled().advanceTo(t);
+    // No fluid in the layer where the two boxes touch.
+    const BodyState top = world.simulation().bodyStates()[2];
+    const FluidState& st = world.simulation().fluid().state();
+    for (std::size_t i = 0; i < st.size(); ++i) {
+      const Vec3 d = st.position[i] - top.position;
+      if (std::abs(d.x()) < top_half.x() && std::abs(d.z()) < top_half.z() &&
+          st.position[i].y() > 2 * bottom_half.y() - 0.5 * kRadius &&
+          st.position[i].y() < top.position.y() - top_half.y() + 0.5 * kRadius)
+        ++between;
+    }
+  }
+  const BodyState bottom = world.simulation().bodyStates()[1];
+  const BodyState top = world.simulation().bodyStates()[2];
+  std::printf("[ stack ] bottom box at %.4f m (rest %.4f), top box at %.4f m (rest %.4f), "
+              "top moved %.4f m sideways, fluid between %zu, max_penetrating %zu\n",
+              bottom.position.y(), bottom_at.y(), top.position.y(), top_at.y(),
+              std::hypot(top.position.x() - top_at.x(), top.position.z() - top_at.z()), between,
+              world.simulation().maxPenetrating());
+  EXPECT_NEAR(bottom.position.y(), bottom_at.y(), 0.002);
+  EXPECT_NEAR(top.position.y(), top_at.y(), 0.002);
+  EXPECT_LT(std::hypot(top.position.x() - top_at.x(), top.position.z() - top_at.z()), 0.01);
+  EXPECT_EQ(between, 0u);
+  EXPECT_EQ(world.simulation().maxPenetrating(), 0u);
 }
 
 }  // namespace
