@@ -1,4 +1,5 @@
 #include "bullet_bridge/bullet_shapes.hpp"
+#include "bullet_bridge/convert.hpp"
 
 #include "coupling/obj_reader.hpp"
 
@@ -13,18 +14,6 @@
 namespace wake::bullet {
 
 namespace {
-
-Vec3 toVec(const btVector3& v) {
-  return Vec3(double(v.x()), double(v.y()), double(v.z()));
-}
-
-Pose toPose(const btTransform& t) {
-  const btQuaternion q = t.getRotation();
-  Pose p;
-  p.position = toVec(t.getOrigin());
-  p.orientation = Quat(double(q.w()), double(q.x()), double(q.y()), double(q.z())).normalized();
-  return p;
-}
 
 /// Rotation taking Bullet's y-up convention to up axis `axis` (0 x, 1 y, 2 z).
 std::shared_ptr<const Shape> alongAxis(std::shared_ptr<const Shape> y_up, int axis) {
@@ -185,17 +174,6 @@ ShapeStore::ShapeStore(ShapeStore&&) noexcept = default;
 ShapeStore& ShapeStore::operator=(ShapeStore&&) noexcept = default;
 
 namespace {
-
-btVector3 toBt(const Vec3& v) {
-  return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z()));
-}
-
-btTransform toBt(const Pose& p) {
-  const Quat& q = p.orientation;
-  return btTransform(
-      btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())),
-      toBt(p.position));
-}
 
 template <class T>
 T* keep(ShapeStore& store, std::unique_ptr<T> shape) {

@@ -1,6 +1,7 @@
 #include "bullet_bridge/coupled_world.hpp"
 
 #include "bullet_bridge/bullet_shapes.hpp"
+#include "bullet_bridge/convert.hpp"
 
 #include <BulletDynamics/Dynamics/btActionInterface.h>
 #include <btBulletDynamicsCommon.h>
@@ -10,34 +11,12 @@
 
 namespace wake {
 
-namespace {
+using bullet::toBt;
+using bullet::toMat;
+using bullet::toPose;
+using bullet::toVec;
 
-Vec3 toVec(const btVector3& v) {
-  return Vec3(double(v.x()), double(v.y()), double(v.z()));
-}
-btVector3 toBt(const Vec3& v) {
-  return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z()));
-}
-Pose toPose(const btTransform& t) {
-  const btQuaternion q = t.getRotation();
-  Pose p;
-  p.position = toVec(t.getOrigin());
-  p.orientation = Quat(double(q.w()), double(q.x()), double(q.y()), double(q.z())).normalized();
-  return p;
-}
-btTransform toBt(const Pose& p) {
-  const Quat& q = p.orientation;
-  return btTransform(
-      btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())),
-      toBt(p.position));
-}
-Mat3 toMat(const btMatrix3x3& m) {
-  Mat3 out;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c)
-      out(r, c) = double(m[r][c]);
-  return out;
-}
+namespace {
 
 BodyKind kindOf(const btRigidBody& body) {
   if (body.isKinematicObject()) return BodyKind::Kinematic;

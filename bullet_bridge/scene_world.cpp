@@ -1,6 +1,7 @@
 #include "bullet_bridge/scene_world.hpp"
 
 #include "bullet_bridge/bullet_shapes.hpp"
+#include "bullet_bridge/convert.hpp"
 
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <btBulletDynamicsCommon.h>
@@ -9,29 +10,12 @@
 
 namespace wake {
 
-namespace {
+using bullet::toBt;
+using bullet::toMat;
+using bullet::toPose;
+using bullet::toVec;
 
-btVector3 toBt(const Vec3& v) {
-  return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z()));
-}
-btTransform toBt(const Pose& p) {
-  const Quat& q = p.orientation;
-  return btTransform(
-      btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())),
-      toBt(p.position));
-}
-Vec3 toVec(const btVector3& v) {
-  return Vec3(double(v.x()), double(v.y()), double(v.z()));
-}
-Pose toPose(const btTransform& t) {
-  const btQuaternion q = t.getRotation();
-  Pose p;
-  p.position = toVec(t.getOrigin());
-  p.orientation = Quat(double(q.w()), double(q.x()), double(q.y()), double(q.z())).normalized();
-  return p;
-}
-
-}  // namespace
+namespace {}  // namespace
 
 struct SceneWorld::BulletParts {
   btDefaultCollisionConfiguration config;
