@@ -11,7 +11,6 @@
 namespace wake {
 
 using bullet::toBt;
-using bullet::toMat;
 using bullet::toPose;
 using bullet::toVec;
 
