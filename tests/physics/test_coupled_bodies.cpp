@@ -149,7 +149,8 @@ TEST(Sinking, DenseBoxSinksToTheFloorAndStays) {
 double sphereDepth(double viscosity) {
   const Vec3 size(0.16, 0.35, 0.16);
   const double depth = 0.25, radius = 0.03;
-  SimulationSettings sim = fluidBox(Vec3(size.x(), depth, size.z()), CouplingMethod::Local, viscosity);
+  SimulationSettings sim =
+      fluidBox(Vec3(size.x(), depth, size.z()), CouplingMethod::Local, viscosity);
   BodySpec ball;
   ball.name = "ball";
   ball.kind = BodyKind::Dynamic;
@@ -160,9 +161,10 @@ double sphereDepth(double viscosity) {
   SceneWorld world(sim, {tank(size), ball});
   world.coupled().advanceTo(0.25);
   const double y = world.simulation().bodyStates()[1].position.y();
-  std::printf("[ drag ] viscosity %.1f: sphere centre %.4f m below the initial surface, "
-              "max_penetrating %zu\n",
-              viscosity, depth - y, world.simulation().maxPenetrating());
+  std::printf(
+      "[ drag ] viscosity %.1f: sphere centre %.4f m below the initial surface, "
+      "max_penetrating %zu\n",
+      viscosity, depth - y, world.simulation().maxPenetrating());
   EXPECT_EQ(world.simulation().maxPenetrating(), 0u);
   return depth - y;
 }
@@ -197,11 +199,12 @@ TEST(BodyContact, BoxStaysStackedOnAHeavierBoxUnderWater) {
   }
   const BodyState bottom = world.simulation().bodyStates()[1];
   const BodyState top = world.simulation().bodyStates()[2];
-  std::printf("[ stack ] bottom box at %.4f m (rest %.4f), top box at %.4f m (rest %.4f), "
-              "top moved %.4f m sideways, fluid between %zu, max_penetrating %zu\n",
-              bottom.position.y(), bottom_at.y(), top.position.y(), top_at.y(),
-              std::hypot(top.position.x() - top_at.x(), top.position.z() - top_at.z()), between,
-              world.simulation().maxPenetrating());
+  std::printf(
+      "[ stack ] bottom box at %.4f m (rest %.4f), top box at %.4f m (rest %.4f), "
+      "top moved %.4f m sideways, fluid between %zu, max_penetrating %zu\n",
+      bottom.position.y(), bottom_at.y(), top.position.y(), top_at.y(),
+      std::hypot(top.position.x() - top_at.x(), top.position.z() - top_at.z()), between,
+      world.simulation().maxPenetrating());
   EXPECT_NEAR(bottom.position.y(), bottom_at.y(), 0.002);
   EXPECT_NEAR(top.position.y(), top_at.y(), 0.002);
   EXPECT_LT(std::hypot(top.position.x() - top_at.x(), top.position.z() - top_at.z()), 0.01);
