@@ -130,7 +130,12 @@ TEST_P(Buoyancy, FloatsFlatAtTheArchimedesDraft) {
 INSTANTIATE_TEST_SUITE_P(Ratios, Buoyancy,
                          ::testing::Combine(::testing::Values(0.3, 0.5, 0.7),
                                             ::testing::Values(CouplingMethod::Local,
-                                                              CouplingMethod::Global)));
+                                                              CouplingMethod::Global)),
+                         [](const ::testing::TestParamInfo<Buoyancy::ParamType>& param) {
+                           const int percent = int(std::lround(100 * std::get<0>(param.param)));
+                           return std::string(name(std::get<1>(param.param))) + "_density_" +
+                                  std::to_string(percent);
+                         });
 
 TEST(Sinking, DenseBoxSinksToTheFloorAndStays) {
   // No-slip walls: the last two particle layers between the box and the floor are each
