@@ -86,30 +86,21 @@ class CoupledWorld::Bodies final : public RigidBodies {
       const btRigidBody& body = *owner_.bodies_[b];
       RigidPrediction& p = out[b];
       p = RigidPrediction{};
-      p.state = state(b);
-      switch (kindOf(body)) {
-        case BodyKind::Static:
-          break;
-        case BodyKind::Kinematic:
-          p.state.pose =
-              integratePose(p.state.pose, p.state.linear_velocity, p.state.angular_velocity, dt);
-          break;
-        case BodyKind::Dynamic: {
-          // As Bullet's step before contacts: gravity and user forces, then damping.
-          p.inverse_mass = double(body.getInvMass());
-          p.inverse_inertia_world = toMat(body.getInvInertiaTensorWorld());
-          const Vec3 lf = toVec(body.getLinearFactor()), af = toVec(body.getAngularFactor());
-          const Vec3 force = (user_force_[b] * p.inverse_mass).cwiseProduct(lf);
-          p.state.linear_velocity += dt * (toVec(body.getGravity()).cwiseProduct(lf) + force);
-          p.state.angular_velocity +=
-              dt * (p.inverse_inertia_world * user_torque_[b].cwiseProduct(af));
-          p.state.linear_velocity *= std::pow(1.0 - double(body.getLinearDamping()), dt);
-          p.state.angular_velocity *= std::pow(1.0 - double(body.getAngularDamping()), dt);
-          p.state.pose =
-              integratePose(p.state.pose, p.state.linear_velocity, p.state.angular_velocity, dt);
-          break;
-        }
+      const BodyKind kind = kindOf(body);
+      Vec3 linear = Vec3::Zero(), angular = Vec3::Zero();
+      double linear_damping = 1.0, angular_damping = 1.0;
+      if (kind == BodyKind::Dynamic) {
+        // As Bullet's step before contacts: gravity and user forces, then damping.
+        p.inverse_mass = double(body.getInvMass());
+        p.inverse_inertia_world = toMat(body.getInvInertiaTensorWorld());
+        const Vec3 lf = toVec(body.getLinearFactor()), af = toVec(body.getAngularFactor());
+        linear = toVec(body.getGravity()).cwiseProduct(lf) +
+                 (user_force_[b] * p.inverse_mass).cwiseProduct(lf);
+        angular = p.inverse_inertia_world * user_torque_[b].cwiseProduct(af);
+        linear_damping = std::pow(1.0 - double(body.getLinearDamping()), dt);
+        angular_damping = std::pow(1.0 - double(body.getAngularDamping()), dt);
       }
+      p.state = stepBody(kind, state(b), linear, angular, dt, linear_damping, angular_damping);
     }
   }
 

@@ -21,16 +21,6 @@ double flatLatticeKernelSum(const CubicSplineKernel& kernel, double s) {
   return sum;
 }
 
-Aabb transformBounds(const Aabb& b, const Pose& pose, bool to_world) {
-  Aabb out;
-  if (b.empty()) return out;
-  for (int corner = 0; corner < 8; ++corner) {
-    const Vec3 p = b.corner(corner);
-    out.extend(to_world ? pose.toWorld(p) : pose.toBody(p));
-  }
-  return out;
-}
-
 Aabb grown(Aabb b, double by) {
   b.min.array() -= by;
   b.max.array() += by;
@@ -327,16 +317,9 @@ void Boundaries::contactGeometry(const Vec3& x, Contact& ct) const {
   const Shape& shape = *b.settings.shape;
   const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
   const double d = shape.signedDistance(p);
-  const double h = 1e-3 * radius_;
-  Vec3 grad;
-  for (int k = 0; k < 3; ++k) {
-    Vec3 e = Vec3::Zero();
-    e[k] = h;
-    grad[k] = shape.signedDistance(p + e) - shape.signedDistance(p - e);
-  }
-  const double len = grad.norm();
-  if (len > 1e-12 && std::isfinite(d)) {
-    ct.normal = b.rotation * (grad / len);
+  const Vec3 grad = sdfGradient(shape, p, 1e-3 * radius_);
+  if (!grad.isZero() && std::isfinite(d)) {
+    ct.normal = b.rotation * grad;
     ct.point = x - d * ct.normal;
     return;
   }

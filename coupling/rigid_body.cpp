@@ -28,29 +28,34 @@ SimpleRigidBodies::SimpleRigidBodies(std::vector<RigidBodyInit> bodies, const Ve
   }
 }
 
+RigidState stepBody(BodyKind kind, const RigidState& state, const Vec3& linear_acceleration,
+                    const Vec3& angular_acceleration, double dt, double linear_damping,
+                    double angular_damping) {
+  RigidState out = state;
+  if (kind == BodyKind::Static) return out;
+  if (kind == BodyKind::Dynamic) {
+    out.linear_velocity += dt * linear_acceleration;
+    out.angular_velocity += dt * angular_acceleration;
+    out.linear_velocity *= linear_damping;
+    out.angular_velocity *= angular_damping;
+  }
+  out.pose = integratePose(state.pose, out.linear_velocity, out.angular_velocity, dt);
+  return out;
+}
+
 RigidPrediction SimpleRigidBodies::advance(const RigidBodyInit& b, double dt,
                                            const Wrench& w) const {
   RigidPrediction p;
-  p.state = b.state;
-  switch (b.kind) {
-    case BodyKind::Static:
-      break;
-    case BodyKind::Kinematic:
-      p.state.pose =
-          integratePose(b.state.pose, b.state.linear_velocity, b.state.angular_velocity, dt);
-      break;
-    case BodyKind::Dynamic: {
-      // Semi-implicit Euler; the inverse inertia is taken at the step's start pose.
-      const Mat3 rot = b.state.pose.orientation.toRotationMatrix();
-      p.inverse_mass = 1.0 / b.mass;
-      p.inverse_inertia_world = rot * b.inertia.cwiseInverse().asDiagonal() * rot.transpose();
-      p.state.linear_velocity += dt * (gravity_ + p.inverse_mass * w.force);
-      p.state.angular_velocity += dt * (p.inverse_inertia_world * w.torque);
-      p.state.pose =
-          integratePose(b.state.pose, p.state.linear_velocity, p.state.angular_velocity, dt);
-      break;
-    }
+  Vec3 linear = Vec3::Zero(), angular = Vec3::Zero();
+  if (b.kind == BodyKind::Dynamic) {
+    // The inverse inertia is taken at the step's start pose.
+    const Mat3 rot = b.state.pose.orientation.toRotationMatrix();
+    p.inverse_mass = 1.0 / b.mass;
+    p.inverse_inertia_world = rot * b.inertia.cwiseInverse().asDiagonal() * rot.transpose();
+    linear = gravity_ + p.inverse_mass * w.force;
+    angular = p.inverse_inertia_world * w.torque;
   }
+  p.state = stepBody(b.kind, b.state, linear, angular, dt);
   return p;
 }
 

@@ -87,6 +87,14 @@ class SimpleRigidBodies final : public RigidBodies {
   Vec3 gravity_;
 };
 
+/// One semi-implicit Euler step of a body over dt: static bodies stay; kinematic bodies
+/// move with their velocities; dynamic bodies' velocities gain dt times the accelerations
+/// (m/s^2, rad/s^2), are then multiplied by the damping factors, and the pose moves with
+/// the new velocities.
+RigidState stepBody(BodyKind kind, const RigidState& state, const Vec3& linear_acceleration,
+                    const Vec3& angular_acceleration, double dt, double linear_damping = 1.0,
+                    double angular_damping = 1.0);
+
 /// Pose after moving with constant linear and angular velocity for dt (exact rotation).
 Pose integratePose(const Pose& pose, const Vec3& linear_velocity, const Vec3& angular_velocity,
                    double dt);

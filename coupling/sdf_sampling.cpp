@@ -57,16 +57,7 @@ class Field {
   double operator()(const Vec3& p) const { return shape_.signedDistance(p); }
 
   /// Unit gradient of the signed distance at p (zero vector when it vanishes).
-  Vec3 gradient(const Vec3& p) const {
-    Vec3 g;
-    for (int a = 0; a < 3; ++a) {
-      Vec3 d = Vec3::Zero();
-      d[a] = step_;
-      g[a] = (shape_.signedDistance(p + d) - shape_.signedDistance(p - d)) / (2.0 * step_);
-    }
-    const double norm = g.norm();
-    return norm > 0.0 ? Vec3(g / norm) : Vec3::Zero();
-  }
+  Vec3 gradient(const Vec3& p) const { return sdfGradient(shape_, p, step_); }
 
   /// Newton steps p <- p - sd(p) grad(p) (exact in one step for an exact distance away from
   /// the medial axis) until |sd| <= 1e-12 scale.
@@ -289,12 +280,7 @@ int nearestSite(const PointGrid& grid, const std::vector<Vec3>& sites,
 }  // namespace
 
 void sampleSurfaceBySdf(const Shape& shape, double spacing, double radius, SurfaceSamples& out) {
-  if (!(spacing > 0.0) || !std::isfinite(spacing))
-    throw std::invalid_argument("shape sampling: spacing must be finite and > 0, got " +
-                                std::to_string(spacing));
-  if (!(radius >= 0.0) || !std::isfinite(radius))
-    throw std::invalid_argument("shape sampling: radius must be finite and >= 0, got " +
-                                std::to_string(radius));
+  checkSampling(spacing, radius);
   Aabb box = shape.bounds(Aabb());
   if (box.empty() || !box.min.allFinite() || !box.max.allFinite())
     throw std::invalid_argument(std::string("sampleSurfaceBySdf: shape '") + shape.typeName() +

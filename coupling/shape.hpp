@@ -70,6 +70,14 @@ class Shape {
   virtual std::optional<ConvexMeasures> convexMeasures() const { return std::nullopt; }
 };
 
+/// Throws std::invalid_argument unless `spacing` is finite and > 0 and `radius` finite and
+/// >= 0: the checks of every Shape::sample.
+void checkSampling(double spacing, double radius);
+
+/// Unit gradient of shape's signed distance at p by central differences of step `step`
+/// (m); the zero vector where it vanishes (on a medial point).
+Vec3 sdfGradient(const Shape& shape, const Vec3& p, double step);
+
 /// Solid box centred at the origin.  half_extents > 0 (m).
 std::unique_ptr<Shape> makeBox(const Vec3& half_extents);
 /// Solid sphere centred at the origin.  radius > 0 (m).

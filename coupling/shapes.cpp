@@ -24,15 +24,6 @@ std::string str(const Vec3& v) {
          ")";
 }
 
-void checkSpacing(double spacing, double radius) {
-  if (!(spacing > 0.0) || !std::isfinite(spacing))
-    throw std::invalid_argument("shape sampling: spacing must be finite and > 0, got " +
-                                std::to_string(spacing));
-  if (!(radius >= 0.0) || !std::isfinite(radius))
-    throw std::invalid_argument("shape sampling: radius must be finite and >= 0, got " +
-                                std::to_string(radius));
-}
-
 /// Exact signed distance (m) to the box [lo, hi]; an infinite bound opens that side.
 double boxSignedDistance(const Vec3& p, const Vec3& lo, const Vec3& hi) {
   // Per axis: > 0 outside the slab, < 0 inside it (depth to the nearer side).
@@ -101,7 +92,7 @@ class BoxShape final : public Shape {
   Aabb bounds(const Aabb&) const override { return Aabb{-half_, half_}; }
 
   void sample(double spacing, double radius, const Aabb&, SurfaceSamples& out) const override {
-    checkSpacing(spacing, radius);
+    checkSampling(spacing, radius);
     sampleBoxSurface(-half_, half_, spacing, radius, out);
   }
 
@@ -131,7 +122,7 @@ class SphereShape final : public Shape {
 
   /// Fibonacci sphere: N nearly uniform directions, each standing for 4 pi R^2 / N.
   void sample(double spacing, double radius, const Aabb&, SurfaceSamples& out) const override {
-    checkSpacing(spacing, radius);
+    checkSampling(spacing, radius);
     const double total_area = 4.0 * kPi * radius_ * radius_;  // m^2
     const long n = std::max(1L, std::lround(total_area / (spacing * spacing)));
     const double golden_angle = kPi * (3.0 - std::sqrt(5.0));  // rad
@@ -176,7 +167,7 @@ class PlaneShape final : public Shape {
 
   /// Samples the rectangle of the plane covering the orthogonal projection of `clip`.
   void sample(double spacing, double radius, const Aabb& clip, SurfaceSamples& out) const override {
-    checkSpacing(spacing, radius);
+    checkSampling(spacing, radius);
     if (clip.empty() || !isFinite(clip.min) || !isFinite(clip.max)) return;
     const Vec3 origin = offset_ * normal_;  // m, foot of the plane from the body origin
     double u_lo = std::numeric_limits<double>::infinity(), u_hi = -u_lo;
@@ -246,7 +237,7 @@ class TankShape final : public Shape {
   /// 5 inner faces (floor top, 4 inner walls), 5 outer faces (bottom, 4 outer walls) and
   /// the top rim as 4 strips of width t.
   void sample(double spacing, double radius, const Aabb&, SurfaceSamples& out) const override {
-    checkSpacing(spacing, radius);
+    checkSampling(spacing, radius);
     const Vec3 ex = Vec3::UnitX(), ey = Vec3::UnitY(), ez = Vec3::UnitZ();
     const Vec3 size = max_ - min_;               // m, cavity size
     const Vec3 outer = outer_max_ - outer_min_;  // m, outer box size
@@ -320,6 +311,26 @@ std::unique_ptr<Shape> makeTank(const Vec3& min, const Vec3& max, double wall_th
     throw std::invalid_argument("tank: wall_thickness must be finite and > 0, got " +
                                 std::to_string(wall_thickness));
   return std::make_unique<TankShape>(min, max, wall_thickness);
+}
+
+void checkSampling(double spacing, double radius) {
+  if (!(spacing > 0.0) || !std::isfinite(spacing))
+    throw std::invalid_argument("shape sampling: spacing must be finite and > 0, got " +
+                                std::to_string(spacing));
+  if (!(radius >= 0.0) || !std::isfinite(radius))
+    throw std::invalid_argument("shape sampling: radius must be finite and >= 0, got " +
+                                std::to_string(radius));
+}
+
+Vec3 sdfGradient(const Shape& shape, const Vec3& p, double step) {
+  Vec3 g;
+  for (int a = 0; a < 3; ++a) {
+    Vec3 d = Vec3::Zero();
+    d[a] = step;
+    g[a] = (shape.signedDistance(p + d) - shape.signedDistance(p - d)) / (2.0 * step);
+  }
+  const double norm = g.norm();
+  return norm > 0.0 ? Vec3(g / norm) : Vec3::Zero();
 }
 
 }  // namespace wake

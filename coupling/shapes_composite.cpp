@@ -27,15 +27,6 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kGridCells = 100.0 * 100.0 * 100.0;  ///< cells of a grid volume estimate
 
-void checkSpacing(double spacing, double radius) {
-  if (!(spacing > 0.0) || !std::isfinite(spacing))
-    throw std::invalid_argument("shape sampling: spacing must be finite and > 0, got " +
-                                std::to_string(spacing));
-  if (!(radius >= 0.0) || !std::isfinite(radius))
-    throw std::invalid_argument("shape sampling: radius must be finite and >= 0, got " +
-                                std::to_string(radius));
-}
-
 bool finiteBox(const Aabb& b) {
   return !b.empty() && b.min.allFinite() && b.max.allFinite();
 }
@@ -61,16 +52,6 @@ double gridVolume(const Aabb& box, const std::function<bool(const Vec3&)>& insid
       for (int k = 0; k < n.z(); ++k)
         count += inside(box.min + Vec3(i + 0.5, j + 0.5, k + 0.5).cwiseProduct(cell)) ? 1 : 0;
   return static_cast<double>(count) * cell.prod();
-}
-
-Aabb transformBounds(const Aabb& b, const Pose& pose, bool to_parent) {
-  Aabb out;
-  if (b.empty()) return out;
-  for (int corner = 0; corner < 8; ++corner) {
-    const Vec3 p = b.corner(corner);
-    out.extend(to_parent ? pose.toWorld(p) : pose.toBody(p));
-  }
-  return out;
 }
 
 Aabb intersection(const Aabb& a, const Aabb& b) {
@@ -118,7 +99,7 @@ class RoundedShape final : public Shape {
   /// sampleSurfaceBySdf; with Steiner data, the areas are scaled to add up to the exact
   /// surface area.
   void sample(double spacing, double radius, const Aabb&, SurfaceSamples& out) const override {
-    checkSpacing(spacing, radius);
+    checkSampling(spacing, radius);
     const std::size_t first = out.size();
     sampleSurfaceBySdf(*this, spacing, radius, out);
     if (!measures_) return;
@@ -184,7 +165,7 @@ class CompoundShape final : public Shape {
   /// the samples on a face shared with a touching child (or facing it across a gap narrower
   /// than tau), so no sample ends up inside the union.
   void sample(double spacing, double radius, const Aabb& clip, SurfaceSamples& out) const override {
-    checkSpacing(spacing, radius);
+    checkSampling(spacing, radius);
     const double tau = 1e-3 * spacing;
     for (std::size_t i = 0; i < children_.size(); ++i) {
       const CompoundChild& c = children_[i];

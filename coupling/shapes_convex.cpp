@@ -23,15 +23,6 @@ using Vec2 = Eigen::Vector2d;  // (r, y): distance to the y axis, height
 
 constexpr double kPi = 3.14159265358979323846;
 
-void checkSpacing(double spacing, double radius) {
-  if (!(spacing > 0.0) || !std::isfinite(spacing))
-    throw std::invalid_argument("shape sampling: spacing must be finite and > 0, got " +
-                                std::to_string(spacing));
-  if (!(radius >= 0.0) || !std::isfinite(radius))
-    throw std::invalid_argument("shape sampling: radius must be finite and >= 0, got " +
-                                std::to_string(radius));
-}
-
 /// Volume, area and integral of mean curvature of a convex body.
 struct Steiner {
   double volume = 0.0;          ///< m^3
@@ -187,8 +178,25 @@ void sampleRevolution(const Profile& profile, double spacing, double radius, Sur
 
 // ---------------------------------------------------------------------------------------
 
+/// A solid of revolution about y whose surface is sampled from its (r, y) profile and
+/// whose volume and Steiner measures are known exactly; subclasses fill both.
+class RevolutionShape : public Shape {
+ public:
+  void sample(double spacing, double radius, const Aabb&, SurfaceSamples& out) const override {
+    checkSampling(spacing, radius);
+    sampleRevolution(profile_, spacing, radius, out);
+  }
+
+  double volume() const override { return steiner_.volume; }
+  std::optional<ConvexMeasures> convexMeasures() const override { return steiner_.measures(); }
+
+ protected:
+  Profile profile_;
+  Steiner steiner_;
+};
+
 /// Segment (0, -h, 0) - (0, h, 0) grown by a ball of radius r.
-class CapsuleShape final : public Shape {
+class CapsuleShape final : public RevolutionShape {
  public:
   CapsuleShape(double radius, double half_height) : r_(radius), h_(half_height) {
     profile_.add(ProfilePiece::arc(Vec2(0.0, h_), r_, 0.5 * kPi, 0.0));
@@ -208,25 +216,15 @@ class CapsuleShape final : public Shape {
     return Aabb{Vec3(-r_, -h_ - r_, -r_), Vec3(r_, h_ + r_, r_)};
   }
 
-  void sample(double spacing, double radius, const Aabb&, SurfaceSamples& out) const override {
-    checkSpacing(spacing, radius);
-    sampleRevolution(profile_, spacing, radius, out);
-  }
-
-  double volume() const override { return steiner_.volume; }
-  std::optional<ConvexMeasures> convexMeasures() const override { return steiner_.measures(); }
-
  private:
   double r_;  ///< m, radius, > 0
   double h_;  ///< m, half the distance between the sphere centres, >= 0
-  Profile profile_;
-  Steiner steiner_;
 };
 
 /// The cylinder (a, b) = (radius - rounding, half_height - rounding) grown by a ball of
 /// `rounding`.  Its signed distance is the exact 2D distance to the rectangle [0, a] x [-b, b]
 /// of the (r, y) plane less the rounding (exact: the inner cylinder is convex).
-class CylinderShape final : public Shape {
+class CylinderShape final : public RevolutionShape {
  public:
   CylinderShape(double radius, double half_height, double rounding)
       : radius_(radius), half_(half_height), rho_(rounding) {
@@ -254,27 +252,17 @@ class CylinderShape final : public Shape {
     return Aabb{Vec3(-radius_, -half_, -radius_), Vec3(radius_, half_, radius_)};
   }
 
-  void sample(double spacing, double radius, const Aabb&, SurfaceSamples& out) const override {
-    checkSpacing(spacing, radius);
-    sampleRevolution(profile_, spacing, radius, out);
-  }
-
-  double volume() const override { return steiner_.volume; }
-  std::optional<ConvexMeasures> convexMeasures() const override { return steiner_.measures(); }
-
  private:
   double radius_;  ///< m, > 0
   double half_;    ///< m, half height, > 0
   double rho_;     ///< m, edge rounding, in [0, min(radius, half))
-  Profile profile_;
-  Steiner steiner_;
 };
 
 /// Cone with apex A = (0, H/2), base rim B = (R, -H/2) in the (r, y) plane, grown by a ball
 /// of `margin`.  The profile triangle is the half of the isosceles triangle A, B, (-R, -H/2);
 /// from r >= 0 the nearer of its slant AB and base CB (C = (0, -H/2)) is the nearest point
 /// of the boundary, inside or out.
-class ConeShape final : public Shape {
+class ConeShape final : public RevolutionShape {
  public:
   ConeShape(double radius, double height, double margin)
       : radius_(radius), height_(height), margin_(margin) {
@@ -314,20 +302,10 @@ class ConeShape final : public Shape {
     return Aabb{Vec3(-r, -half - margin_, -r), Vec3(r, half + margin_, r)};
   }
 
-  void sample(double spacing, double radius, const Aabb&, SurfaceSamples& out) const override {
-    checkSpacing(spacing, radius);
-    sampleRevolution(profile_, spacing, radius, out);
-  }
-
-  double volume() const override { return steiner_.volume; }
-  std::optional<ConvexMeasures> convexMeasures() const override { return steiner_.measures(); }
-
  private:
   double radius_;  ///< m, base radius, > 0
   double height_;  ///< m, apex to base, > 0
   double margin_;  ///< m, >= 0
-  Profile profile_;
-  Steiner steiner_;
 };
 
 bool positive(double x) {

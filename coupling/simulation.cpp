@@ -38,9 +38,7 @@ Aabb sceneBounds(const SimulationSettings& s) {
     if (!body.shape) continue;
     const Aabb local = body.shape->bounds(unbounded);
     if (local.empty() || !local.min.allFinite() || !local.max.allFinite()) continue;
-    for (int corner = 0; corner < 8; ++corner) {
-      box.extend(body.pose.toWorld(local.corner(corner)));
-    }
+    box.extend(transformBounds(local, body.pose, /*to_world=*/true));
   }
   return box;
 }

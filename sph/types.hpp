@@ -47,4 +47,15 @@ struct Pose {
   Vec3 rotate(const Vec3& d) const { return orientation * d; }
 };
 
+/// Bounds of box `b` carried by `pose` to the world (to_world) or from it into the body.
+inline Aabb transformBounds(const Aabb& b, const Pose& pose, bool to_world) {
+  Aabb out;
+  if (b.empty()) return out;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Vec3 p = b.corner(corner);
+    out.extend(to_world ? pose.toWorld(p) : pose.toBody(p));
+  }
+  return out;
+}
+
 }  // namespace wake

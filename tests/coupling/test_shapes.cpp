@@ -1,5 +1,6 @@
 // Exact shapes and their surface sampling (coupling/shape.hpp).
 #include "coupling/shape.hpp"
+#include "coupling/test_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,6 +13,9 @@
 
 namespace wake {
 namespace {
+
+using test::rawGradient;
+using test::totalArea;
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -33,20 +37,6 @@ std::vector<Vec3> randomPoints(const Vec3& lo, const Vec3& hi, int n, unsigned s
     points.push_back(lo + t.cwiseProduct(hi - lo));
   }
   return points;
-}
-
-double totalArea(const SurfaceSamples& s) {
-  return std::accumulate(s.area.begin(), s.area.end(), 0.0);
-}
-
-/// Central-difference gradient of the signed distance (1/1).
-Vec3 sdfGradient(const Shape& shape, const Vec3& p, double step = 1e-6) {
-  Vec3 g;
-  for (int a = 0; a < 3; ++a) {
-    const Vec3 d = step * Vec3::Unit(a);
-    g[a] = (shape.signedDistance(p + d) - shape.signedDistance(p - d)) / (2.0 * step);
-  }
-  return g;
 }
 
 /// Checks every sample: arrays consistent, unit normal, positive area, the sample lifted by
@@ -232,7 +222,7 @@ TEST(Shapes, BoxSamplesCoverEveryFaceOnTheSurface) {
     EXPECT_TRUE(b->contains(s.position[i]));
     // Normal = direction of the distance gradient just outside the face.
     const Vec3 outside = s.position[i] + (radius + 1e-3) * s.normal[i];
-    EXPECT_LT((sdfGradient(*b, outside) - s.normal[i]).norm(), 1e-6);
+    EXPECT_LT((rawGradient(*b, outside, 1e-6) - s.normal[i]).norm(), 1e-6);
   }
 }
 
@@ -376,8 +366,9 @@ TEST(Shapes, MeshSamplesSubdivideTrianglesOnTheSurface) {
   const auto b = makeBox(Vec3::Constant(0.2));
   for (std::size_t i = 0; i < s.size(); ++i) {
     EXPECT_TRUE(mesh->contains(s.position[i]));
-    EXPECT_LT((sdfGradient(*b, s.position[i] + (radius + 1e-3) * s.normal[i]) - s.normal[i]).norm(),
-              1e-6);
+    EXPECT_LT(
+        (rawGradient(*b, s.position[i] + (radius + 1e-3) * s.normal[i], 1e-6) - s.normal[i]).norm(),
+        1e-6);
   }
 }
 

@@ -1,6 +1,7 @@
 // Shapes of the Bullet bridge (coupling/shape.hpp): capsule, rounded cylinder, cone with
 // margin, rounded convex shapes, compounds, volumes, and the quality of their sampling.
 #include "coupling/shape.hpp"
+#include "coupling/test_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -15,21 +16,10 @@
 namespace wake {
 namespace {
 
+using test::rawGradient;
+using test::totalArea;
+
 constexpr double kPi = 3.14159265358979323846;
-
-double totalArea(const SurfaceSamples& s) {
-  return std::accumulate(s.area.begin(), s.area.end(), 0.0);
-}
-
-/// Central-difference gradient of the signed distance.
-Vec3 sdfGradient(const Shape& shape, const Vec3& p, double step = 1e-7) {
-  Vec3 g;
-  for (int a = 0; a < 3; ++a) {
-    const Vec3 d = step * Vec3::Unit(a);
-    g[a] = (shape.signedDistance(p + d) - shape.signedDistance(p - d)) / (2.0 * step);
-  }
-  return g;
-}
 
 /// Points spread over the surface: uniform random points of the bounds (grown by `band`)
 /// within `band` of the surface, projected onto it by Newton steps on the signed distance.
@@ -46,7 +36,7 @@ std::vector<Vec3> surfacePoints(const Shape& shape, double band, int n, unsigned
     for (int k = 0; k < 20; ++k) {
       const double d = shape.signedDistance(p);
       if (std::abs(d) < 1e-13) break;
-      p -= d * sdfGradient(shape, p).normalized();
+      p -= d * rawGradient(shape, p, 1e-7).normalized();
     }
     points.push_back(p);
   }
@@ -89,7 +79,7 @@ void expectGoodSampling(const Shape& shape, double spacing, double radius, doubl
     ASSERT_GT(s.area[i], 0.0) << i;
     worst_sd = std::max(worst_sd, std::abs(shape.signedDistance(surface[i])));
     const Vec3 outside = surface[i] + eps * s.normal[i];
-    worst_normal = std::max(worst_normal, (sdfGradient(shape, outside) - s.normal[i]).norm());
+    worst_normal = std::max(worst_normal, (rawGradient(shape, outside, 1e-7) - s.normal[i]).norm());
     ASSERT_GT(shape.signedDistance(outside), 0.0) << i;
     ASSERT_LT(shape.signedDistance(surface[i] - eps * s.normal[i]), 0.0) << i;
   }
@@ -131,7 +121,7 @@ void expectUnitGradient(const Shape& shape, int n, unsigned seed) {
   for (int i = 0; i < n; ++i) {
     const Vec3 p = lo + Vec3(u(rng), u(rng), u(rng)).cwiseProduct(hi - lo);
     if (std::abs(shape.signedDistance(p)) < 1e-3) continue;
-    const double g = sdfGradient(shape, p, 1e-6).norm();
+    const double g = rawGradient(shape, p, 1e-6).norm();
     if (std::abs(g - 1.0) > 1e-4) {
       // The medial axis (inside) has no gradient: a kink where two nearest points meet.
       EXPECT_LT(shape.signedDistance(p), 0.0) << p.transpose() << " |grad| " << g;
