@@ -315,8 +315,12 @@ double Simulation::step(double t_limit) {
 #pragma omp parallel for reduction(max : rho_max) schedule(static)
   for (std::int64_t i = 0; i < n; ++i)
     rho_max = std::max(rho_max, st.density[i]);
-  max_density_ratio_ = std::max(max_density_ratio_, rho_max / settings_.fluid.rest_density);
-  max_penetrating_ = std::max(max_penetrating_, countPenetrating());
+  const double ratio = rho_max / settings_.fluid.rest_density;
+  const std::size_t penetrating = countPenetrating();
+  max_density_ratio_ = std::max(max_density_ratio_, ratio);
+  max_penetrating_ = std::max(max_penetrating_, penetrating);
+  window_density_ratio_ = std::max(window_density_ratio_, ratio);
+  window_penetrating_ = std::max(window_penetrating_, penetrating);
   return dt;
 }
 

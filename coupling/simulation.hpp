@@ -98,6 +98,13 @@ class Simulation {
   std::size_t countPenetrating() const;
   /// Largest density / rest density seen after any step.
   double maxDensityRatio() const { return max_density_ratio_; }
+  /// The same two maxima over the steps since the last resetWindow() (e.g. one frame).
+  double windowMaxDensityRatio() const { return window_density_ratio_; }
+  std::size_t windowMaxPenetrating() const { return window_penetrating_; }
+  void resetWindow() {
+    window_density_ratio_ = 0;
+    window_penetrating_ = 0;
+  }
   double lastDt() const { return last_dt_; }
 
   void snapshot(FluidSnapshot& out) const;
@@ -120,6 +127,8 @@ class Simulation {
   double last_dt_ = 0;
   std::size_t removed_at_start_ = 0, lost_ = 0, max_penetrating_ = 0;
   double max_density_ratio_ = 0;
+  double window_density_ratio_ = 0;
+  std::size_t window_penetrating_ = 0;
   StepTimings timings_;
   std::vector<Vec3> x_pred_;                       // scratch: predicted positions x* of the step
   std::vector<Vec3> v_old_;                        // scratch: velocities at the start of the step

@@ -2,6 +2,7 @@
 
 #include "bullet_bridge/scene_world.hpp"
 #include "io/output.hpp"
+#include "io/series.hpp"
 #include "io/summary.hpp"
 
 #include <omp.h>
@@ -169,6 +170,7 @@ RunResult runScene(const SceneFile& scene, const RunOptions& options) {
   }
 
   FrameWriter writer(options.out_dir, scene, *sim);
+  SeriesWriter series(options.out_dir, *sim);
   FluidSnapshot fluid;
   double previous_time = 0.0;
   try {
@@ -177,10 +179,13 @@ RunResult runScene(const SceneFile& scene, const RunOptions& options) {
       sim->snapshot(fluid);
       checkHealth(fluid, *sim, scene, k, previous_time, writer.h5Path() + ".partial");
       writer.writeFrame(*sim, fluid);
+      series.writeFrame(*sim, k == 0);
+      sim->resetWindow();
       progress.frame(k, *sim);
       previous_time = sim->time();
     }
     writer.finish();
+    series.finish();
   } catch (const RunError&) {
     progress.abandon();
     throw;

@@ -619,6 +619,14 @@ void overrideEndTime(SceneFile& scene, double end_time, const std::string& optio
   scene.end_time = end_time;
 }
 
+void overrideResolution(SceneFile& scene, double factor, const std::string& option) {
+  if (!std::isfinite(factor) || !kPositive.contains(factor))
+    throw SceneError(option + ": must be a finite number > 0 (got " + formatNumber(factor) + ")");
+  scene.sim.fluid.particle_radius /= factor;
+  const std::string where = option + " " + formatNumber(factor);
+  checkParticleCount(Where{&where, ""}, scene.sim);
+}
+
 std::size_t frameCount(const SceneFile& scene) {
   // A frame within 1e-9 of a frame interval of the end is the end frame itself.
   const double intervals = scene.end_time * scene.frame_rate;

@@ -47,6 +47,13 @@ SceneFile parseScene(const std::string& json_text, const std::string& path);
 /// `option` when `end_time` is not a finite number > 0.
 void overrideEndTime(SceneFile& scene, double end_time, const std::string& option = "--end");
 
+/// Refines the scene: the fluid's particle radius is divided by `factor` (> 0), so the
+/// particle count grows about factor^3. Automatic sizes (margins, tank walls) follow the
+/// radius. Throws SceneError naming `option` when `factor` is not finite and > 0, or when
+/// the refined fluid would not fit in memory.
+void overrideResolution(SceneFile& scene, double factor,
+                        const std::string& option = "--resolution");
+
 /// Output frame times: 0, 1/frame_rate, 2/frame_rate, ... and end_time as the last one.
 /// Returns the number of frames after frame 0 (so the run writes frameCount + 1 frames).
 std::size_t frameCount(const SceneFile& scene);

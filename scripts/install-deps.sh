@@ -4,7 +4,8 @@
 set -euo pipefail
 packages=(cmake ninja-build g++ make pkg-config
   libeigen3-dev libbullet-dev libhdf5-dev nlohmann-json3-dev libcli11-dev
-  libtinyobjloader-dev libgtest-dev libgmock-dev libbenchmark-dev)
+  libtinyobjloader-dev libgtest-dev libgmock-dev libbenchmark-dev
+  libstb-dev gnuplot-nox)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,6 +1,6 @@
 // `wake`: the headless command line (DESIGN.md §7).
 //
-//   wake run SCENE.json --out DIR [--quiet] [--threads N] [--end T]
+//   wake run SCENE.json --out DIR [--quiet] [--threads N] [--end T] [--resolution F]
 //
 // Exit status: 0 success, 2 bad input (scene, options), 1 a run that failed.
 // Every error is one line on stderr: "wake: error: <message>".
@@ -38,7 +38,7 @@ int main(int argc, char** argv) {
   std::string scene_path, out_dir;
   bool quiet = false;
   int threads = 0;
-  double end_time = 0.0;
+  double end_time = 0.0, resolution = 1.0;
   CLI::App* run = app.add_subcommand(
       "run", "Run a scene headless; write DIR/<scene>.h5, DIR/<scene>.xdmf, DIR/summary.json");
   run->add_option("scene", scene_path, "Scene file (JSON, see io/SCENE_FORMAT.md)")->required();
@@ -48,6 +48,9 @@ int main(int argc, char** argv) {
       run->add_option("--threads,-j", threads, "OpenMP threads (>= 1; default: all cores)");
   CLI::Option* end_option =
       run->add_option("--end", end_time, "End time in s, overrides the scene's time.end");
+  CLI::Option* resolution_option = run->add_option(
+      "--resolution", resolution,
+      "Refinement factor F > 0: particle_radius / F, about F^3 times the particles");
 
   try {
     app.parse(argc, argv);
@@ -67,6 +70,7 @@ int main(int argc, char** argv) {
     }
     wake::SceneFile scene = wake::loadScene(scene_path);
     if (end_option->count() > 0) wake::overrideEndTime(scene, end_time, "--end");
+    if (resolution_option->count() > 0) wake::overrideResolution(scene, resolution, "--resolution");
 
     wake::RunOptions options;
     options.out_dir = out_dir;
