@@ -310,6 +310,49 @@ std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxCont
   return count;
 }
 
+std::size_t Boundaries::penaltyTerms(const Vec3& x, double strength,
+                                     std::array<PenaltyTerm, kMaxContacts>& out) const {
+  const double r0 = radius_ + radius_;
+  std::size_t count = 0;
+  // x_k and a_k in the set's frame; `to_world` rotates (moving bodies) into the world.
+  auto add = [&](std::uint32_t body, const Vec3& xk_world, const Vec3& a_world) {
+    std::size_t c = 0;
+    while (c < count && out[c].body != body)
+      ++c;
+    if (c == count) {
+      if (count == kMaxContacts) return;  // more bodies than slots: the rest are ignored
+      out[count++] = PenaltyTerm{body, Vec3::Zero(), Vec3::Zero()};
+    }
+    out[c].accel += a_world;
+    out[c].moment += xk_world.cross(a_world);
+  };
+  auto term = [&](const Vec3& p, const Vec3& xk, double d_sq) -> Vec3 {
+    if (d_sq <= 0.0) return Vec3::Zero();
+    const double q2 = r0 * r0 / d_sq;  // (r0/d)^2
+    const double q4 = q2 * q2;
+    const double q12 = q4 * q4 * q4;
+    return strength * (q12 - q4) / d_sq * (p - xk);
+  };
+  if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
+    forEachContactCandidate(static_, x, [&](std::uint32_t k, double d_sq) {
+      add(static_.body[k], static_.position[k], term(x, static_.position[k], d_sq));
+    });
+  }
+  if (moving_reach_.contains(x)) {
+    for (const MovingBody& m : moving_) {
+      if (!m.world_reach.contains(x)) continue;
+      const Body& b = bodies_[m.body];
+      const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
+      if (!m.samples.reach_box.contains(p)) continue;
+      forEachContactCandidate(m.samples, p, [&](std::uint32_t k, double d_sq) {
+        const Vec3& xk = m.samples.position[k];
+        add(m.body, b.rotation * xk + b.settings.pose.position, b.rotation * term(p, xk, d_sq));
+      });
+    }
+  }
+  return count;
+}
+
 void Boundaries::contactGeometry(const Vec3& x, Contact& ct) const {
   // The sample found the contact; its geometry comes from the exact shape, so edges and
   // corners push the fluid the right way: n = grad SDF at x, x_cp = x - SDF(x) n.
@@ -345,17 +388,22 @@ void Boundaries::correctPositions(std::vector<Vec3>& x,
     if (!candidates[i] && !moving_reach_.contains(x[i])) continue;
     Vec3 xi = x[i];
     std::array<Contact, kMaxContacts> contacts;
-    for (int pass = 0; pass < 4; ++pass) {
+    // A few passes over all bodies, then (when a particle is still being pushed, i.e. it
+    // is squeezed between bodies closer than its diameter) one pass over static bodies
+    // only: a squeezed particle may end inside a moving body, never through a wall.
+    bool moved = true;
+    for (int pass = 0; pass < 5 && moved; ++pass) {
+      const bool static_only = pass == 4;
       const std::size_t count = findContacts(xi, contacts);
-      bool moved = false;
+      moved = false;
       for (std::size_t c = 0; c < count; ++c) {
+        if (static_only && bodies_[contacts[c].body].moving >= 0) continue;
         const double d = rf - (xi - contacts[c].point).dot(contacts[c].normal);
         if (d > 0.0) {
           xi += d * contacts[c].normal;
           moved = true;
         }
       }
-      if (!moved) break;
     }
     x[i] = xi;
   }

@@ -89,6 +89,18 @@ class Boundaries {
   /// (DESIGN.md §3: normals from the exact shape), so corners and edges push fluid out
   /// along the shortest way. Returns how many were written.
   std::size_t findContacts(const Vec3& x, std::array<Contact, kMaxContacts>& out) const;
+  /// Monaghan's penalty force (the paper's baseline, coupling/penalty.hpp) on a fluid
+  /// centre x, per unit fluid mass, from every sample closer than r0 = r_f + r_b:
+  /// a = D [(r0/d)^12 - (r0/d)^4] (x - x_k) / d^2. Per body it writes the acceleration
+  /// sum and the sum of x_k x a_k (moment about the world origin, for the reaction
+  /// torque). Returns the number of bodies written (at most kMaxContacts).
+  struct PenaltyTerm {
+    std::uint32_t body = 0;
+    Vec3 accel = Vec3::Zero();   ///< m/s^2
+    Vec3 moment = Vec3::Zero();  ///< m^2/s^2, sum of x_k x a_k (world)
+  };
+  std::size_t penaltyTerms(const Vec3& x, double strength,
+                           std::array<PenaltyTerm, kMaxContacts>& out) const;
   /// True when x may be within contact reach of a moving body.
   bool nearMovingBody(const Vec3& x) const { return moving_reach_.contains(x); }
   bool hasMovingBodies() const { return !moving_.empty(); }

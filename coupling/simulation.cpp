@@ -75,8 +75,8 @@ void validate(const SimulationSettings& s) {
     require(finite(b.pose.position) && b.pose.orientation.coeffs().allFinite(), field + ".position",
             "must be finite");
   }
-  require(s.method != CouplingMethod::Penalty, "coupling.method",
-          "penalty is not available in this version");
+  require(std::isfinite(s.penalty_strength) && s.penalty_strength >= 0, "coupling.penalty_strength",
+          "must be > 0 or automatic");
 }
 
 }  // namespace
@@ -112,6 +112,11 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
   validate(settings_);
   SimulationSettings& s = settings_;
   if (s.fluid.speed_of_sound <= 0) s.fluid.speed_of_sound = autoSpeedOfSound(s);
+  if (s.method == CouplingMethod::Penalty) {
+    if (s.penalty_strength <= 0)
+      s.penalty_strength = defaultPenaltyStrength(s.fluid.speed_of_sound);
+    penalty_ = std::make_unique<PenaltyBoundary>(s.fluid, s.penalty_strength);
+  }
 
   if (s.domain.empty()) {
     // Automatic domain: the scene's bounds grown by a quarter of their largest extent
@@ -247,6 +252,14 @@ double Simulation::step(double t_limit) {
   t0 = Clock::now();
   fluid_->computeAccelerations(settings_.gravity);
   timings_.forces += secondsSince(t0);
+  if (penalty_) {
+    // Baseline: boundary forces join the fluid's forces; no control, no correction.
+    t0 = Clock::now();
+    last_contacts_ = penalty_->apply(*boundaries_, st.position, st.acceleration, flags_, wrench_);
+    const double t_penalty = secondsSince(t0);
+    timings_.control += t_penalty;
+    timings_.boundary += t_penalty;
+  }
 
   // Predict: v* = v + dt a, x* = x + dt v* (all forces but the boundary's).
   t0 = Clock::now();
@@ -270,23 +283,26 @@ double Simulation::step(double t_limit) {
   rigid_->predict(dt, body_pred_);
   timings_.rigid += secondsSince(t0);
 
-  t0 = Clock::now();
-  std::vector<RigidState>& pred_states = body_final_;  // scratch reuse
-  pred_states.resize(nb);
-  for (std::size_t b = 0; b < nb; ++b)
-    pred_states[b] = body_pred_[b].state;
-  placeBodies(pred_states);
-  const ControlResult control =
-      forcing_.control(*boundaries_, settings_.method, dt, x_pred_, v_old_, body_now_, body_pred_,
-                       st.velocity, flags_, wrench_);
-  last_contacts_ = control.contacts;
-  const double t_control = secondsSince(t0);
-  timings_.control += t_control;
-  timings_.boundary += t_control;
+  ControlResult control;
+  if (!penalty_) {
+    t0 = Clock::now();
+    std::vector<RigidState>& pred_states = body_final_;  // scratch reuse
+    pred_states.resize(nb);
+    for (std::size_t b = 0; b < nb; ++b)
+      pred_states[b] = body_pred_[b].state;
+    placeBodies(pred_states);
+    control = forcing_.control(*boundaries_, settings_.method, dt, x_pred_, v_old_, body_now_,
+                               body_pred_, st.velocity, flags_, wrench_);
+    last_contacts_ = control.contacts;
+    const double t_control = secondsSince(t0);
+    timings_.control += t_control;
+    timings_.boundary += t_control;
+  }
 
   // The bodies take exactly one step with the fluid's wrench.
   t0 = Clock::now();
   if (nb > 0) rigid_->step(dt, wrench_);
+  body_final_.resize(nb);
   for (std::size_t b = 0; b < nb; ++b)
     body_final_[b] = rigid_->state(b);
   timings_.rigid += secondsSince(t0);
@@ -300,7 +316,7 @@ double Simulation::step(double t_limit) {
   // Position correction against the bodies' final poses.
   t0 = Clock::now();
   placeBodies(body_final_);
-  if (control.particles > 0 || boundaries_->hasMovingBodies())
+  if (!penalty_ && (control.particles > 0 || boundaries_->hasMovingBodies()))
     boundaries_->correctPositions(st.position, flags_);
   const double t_correction = secondsSince(t0);
   timings_.correction += t_correction;

@@ -6,6 +6,7 @@
 
 #include "coupling/boundary.hpp"
 #include "coupling/direct_forcing.hpp"
+#include "coupling/penalty.hpp"
 #include "coupling/rigid_body.hpp"
 #include "coupling/shape.hpp"
 #include "sph/fluid.hpp"
@@ -29,6 +30,8 @@ struct SimulationSettings {
   std::vector<FluidBlock> blocks;
   std::vector<BodySettings> bodies;
   CouplingMethod method = CouplingMethod::Local;
+  /// m^2/s^2, D of the penalty baseline (method Penalty); 0 = defaultPenaltyStrength(c).
+  double penalty_strength = 0.0;
   double cfl = 0.4;      ///< lambda of the CFL condition, in (0, 1]
   double max_dt = 1e-3;  ///< s, upper bound of the time step, > 0
   Aabb domain;           ///< m; particles leaving it are lost; empty = automatic
@@ -122,6 +125,7 @@ class Simulation {
   std::unique_ptr<Boundaries> boundaries_;
   std::unique_ptr<RigidBodies> rigid_;
   DirectForcing forcing_;
+  std::unique_ptr<PenaltyBoundary> penalty_;  // method Penalty only
   double time_ = 0;
   std::uint64_t steps_ = 0;
   double last_dt_ = 0;

@@ -338,11 +338,17 @@ void checkParticleCount(const Where& radius_at, const SimulationSettings& sim) {
 }
 
 void readCoupling(const ObjectReader& coupling, SimulationSettings& sim) {
-  coupling.allowOnly({"method"});
+  coupling.allowOnly({"method", "penalty_strength"});
   const std::string method = coupling.choice("method", "local", {"local", "global", "penalty"});
-  if (method == "penalty")
-    coupling.at("method").fail("\"penalty\" is not available yet (use \"local\" or \"global\")");
-  sim.method = method == "global" ? CouplingMethod::Global : CouplingMethod::Local;
+  sim.method = method == "global"    ? CouplingMethod::Global
+               : method == "penalty" ? CouplingMethod::Penalty
+                                     : CouplingMethod::Local;
+  if (coupling.find("penalty_strength")) {
+    if (sim.method != CouplingMethod::Penalty)
+      coupling.at("penalty_strength")
+          .fail("is only used with \"method\": \"penalty\" (method is \"" + method + "\")");
+    sim.penalty_strength = coupling.number("penalty_strength", 0.0, kPositive);
+  }
 }
 
 /// Unit quaternion from "[x, y, z, w]": any finite, non-zero quaternion, normalised.

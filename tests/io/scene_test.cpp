@@ -355,8 +355,18 @@ const BadCase kBadCases[] = {
      "fluid.blocks[0]: ", "no particles"},
     {"more particles than memory", [](json& s) { s["fluid"]["particle_radius"] = 1e-5; },
      "fluid.particle_radius: ", "fluid particles"},
-    {"penalty", [](json& s) { s["coupling"]["method"] = "penalty"; },
-     "coupling.method: ", "not available yet"},
+    {"penalty strength without penalty",
+     [](json& s) {
+       s["coupling"]["method"] = "local";
+       s["coupling"]["penalty_strength"] = 10.0;
+     },
+     "coupling.penalty_strength: ", "only used with"},
+    {"penalty strength zero",
+     [](json& s) {
+       s["coupling"]["method"] = "penalty";
+       s["coupling"]["penalty_strength"] = 0.0;
+     },
+     "coupling.penalty_strength: ", "> 0"},
     {"unknown method", [](json& s) { s["coupling"]["method"] = "magic"; },
      "coupling.method: ", "\"magic\""},
     {"domain max < min",

@@ -1,0 +1,276 @@
+// The paper's experiments (Sec. VI) as demo scenes: checks of what each one claims, on
+// the output that `wake run` wrote for demos/scenes/<name>.json (tests/CMakeLists.txt
+// runs every scene first, as the test scene_<name>).
+#include "scene_output.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace wake {
+namespace {
+
+using test::Frame;
+using test::SceneOutput;
+
+double particleRadius(const SceneOutput& out) {
+  return out.scene().sim.fluid.particle_radius;
+}
+
+/// Fluid centres of frame k inside the box [lo, hi] of the body's own frame.
+std::size_t countInBodyBox(const SceneOutput& out, const std::string& body, std::size_t k,
+                           const Frame& f, const Vec3& lo, const Vec3& hi) {
+  const Pose& pose = out.body(body).pose[k];
+  std::size_t count = 0;
+  for (const Vec3& x : f.position) {
+    const Vec3 p = pose.toBody(x);
+    count += (p.array() > lo.array()).all() && (p.array() < hi.array()).all();
+  }
+  return count;
+}
+
+// --- Stone skipping (Figs. 1, 11) -------------------------------------------------------
+
+void checkStoneSkips(const std::string& scene) {
+  const SceneOutput out(scene);
+  const test::BodyTrack& stone = out.body("stone");
+  const double surface = 0.12;  // m, the basin's water level
+  std::size_t bounces = 0;
+  for (std::size_t k = 1; k < stone.pose.size(); ++k) {
+    const bool at_surface = std::abs(stone.pose[k].position.y() - surface) < 0.05;
+    if (at_surface && stone.velocity[k - 1].y() < 0.0 && stone.velocity[k].y() > 0.2) {
+      ++bounces;
+      std::printf("[ %s ] bounce at t=%.3f s: y=%.3f m, vy %.3f -> %.3f m/s, vx %.2f m/s\n",
+                  scene.c_str(), stone.time[k], stone.pose[k].position.y(),
+                  stone.velocity[k - 1].y(), stone.velocity[k].y(), stone.velocity[k].x());
+    }
+  }
+  const Vec3 x_end = stone.pose.back().position;
+  const Vec3 v_end = stone.velocity.back();
+  std::printf("[ %s ] end: y=%.3f m, speed %.3f m/s, max_penetrating %d\n", scene.c_str(),
+              x_end.y(), v_end.norm(), out.summary()["max_penetrating"].get<int>());
+  EXPECT_GE(bounces, 1u) << "the stone never turned upward at the surface";
+  EXPECT_LT(x_end.y(), surface - 0.03) << "the stone did not sink";
+  EXPECT_LT(v_end.norm(), 0.3 * stone.velocity.front().norm()) << "the stone did not slow";
+  EXPECT_EQ(out.summary()["max_penetrating"].get<int>(), 0);
+}
+
+TEST(StoneSkipping, GlobalBouncesThenSinks) {
+  checkStoneSkips("stone_skipping");
+}
+TEST(StoneSkipping, LocalBouncesThenSinks) {
+  checkStoneSkips("stone_skipping_local");
+}
+
+// --- Impact (Fig. 8) --------------------------------------------------------------------
+
+TEST(Impact, DensityBoundedAndNoLeak) {
+  const SceneOutput out("impact");
+  const double r = particleRadius(out);
+  const double ratio = out.summary()["max_density_ratio"].get<double>();
+  std::printf("[ impact ] max density ratio %.3f (c = %.0f m/s), lost %d, max_penetrating %d\n",
+              ratio, out.summary()["speed_of_sound"].get<double>(),
+              out.summary()["lost_particles"].get<int>(),
+              out.summary()["max_penetrating"].get<int>());
+  EXPECT_LT(ratio, 2.0);
+  EXPECT_EQ(out.summary()["lost_particles"].get<int>(), 0);
+  EXPECT_EQ(out.summary()["max_penetrating"].get<int>(), 0);
+  // Below the basin's rim (y = 1 m) every particle is inside the cavity [0, 0.8] x [0, 0.3]:
+  // fluid outside it came over the rim, none through a wall.
+  std::size_t splashed = 0;
+  for (std::size_t k = 0; k < out.frames(); ++k) {
+    const Frame f = out.frame(k);
+    for (const Vec3& x : f.position) {
+      const bool in_cavity =
+          x.x() > -r && x.x() < 0.8 + r && x.z() > -r && x.z() < 0.3 + r && x.y() > -r;
+      if (x.y() >= 1.0 && !in_cavity) ++splashed;
+      ASSERT_TRUE(in_cavity || x.y() >= 1.0)
+          << "frame " << k << ": fluid at (" << x.transpose() << ") outside the basin";
+    }
+  }
+  std::printf("[ impact ] particle-frames above the rim outside the basin: %zu\n", splashed);
+}
+
+// --- Slip ramp (Fig. 7) -----------------------------------------------------------------
+
+TEST(SlipRamp, FrontTravelsFurtherWithMoreSlip) {
+  const SceneOutput out("slip_ramp");
+  const Frame f0 = out.frame(0), f = out.frame(out.frames() - 1);
+  const char* lanes[] = {"ramp_no_slip", "ramp_half_slip", "ramp_free_slip"};
+  double front[3];
+  for (int lane = 0; lane < 3; ++lane) {
+    const Pose& ramp = out.body(lanes[lane]).pose[0];
+    const double zc = ramp.position.z();
+    // Downhill coordinate along the ramp (its local +x), of particles still on the ramp.
+    auto frontOf = [&](const Frame& fr) {
+      double best = -1e9;
+      for (const Vec3& x : fr.position) {
+        if (std::abs(x.z() - zc) > 0.05) continue;
+        const Vec3 p = ramp.toBody(x);
+        if (p.y() > 0.0 && p.y() < 0.08 && std::abs(p.x()) < 0.5) best = std::max(best, p.x());
+      }
+      return best;
+    };
+    front[lane] = frontOf(f) - frontOf(f0);
+    std::printf("[ slip ramp ] %s: front moved %.4f m in %.2f s\n", lanes[lane], front[lane],
+                f.time);
+  }
+  EXPECT_LT(front[0], front[1]);
+  EXPECT_LT(front[1], front[2]);
+  EXPECT_EQ(out.summary()["max_penetrating"].get<int>(), 0);
+}
+
+// --- Buoyancy (Fig. 9) ------------------------------------------------------------------
+
+TEST(Buoyancy, LightFloatsMediumSinksSlowlyHeavySinksFast) {
+  const SceneOutput out("buoyancy");
+  const double light = out.body("light").pose.back().position.y();
+  const double medium = out.body("medium").pose.back().position.y();
+  const double heavy = out.body("heavy").pose.back().position.y();
+  // Time each cube first reaches 0.2 m (its centre half a cube below the water line).
+  auto reach = [&](const char* name) {
+    const test::BodyTrack& t = out.body(name);
+    for (std::size_t k = 0; k < t.pose.size(); ++k)
+      if (t.pose[k].position.y() < 0.2) return t.time[k];
+    return std::numeric_limits<double>::infinity();
+  };
+  std::printf(
+      "[ buoyancy ] final heights: light %.3f, medium %.3f, heavy %.3f m; "
+      "below 0.2 m at: medium %.3f s, heavy %.3f s\n",
+      light, medium, heavy, reach("medium"), reach("heavy"));
+  EXPECT_GT(light, medium);
+  EXPECT_GT(medium, heavy);
+  EXPECT_GT(light + 0.05, 0.30) << "the light cube's top is under water: it does not float";
+  EXPECT_LT(reach("heavy"), reach("medium"));
+  EXPECT_EQ(out.summary()["max_penetrating"].get<int>(), 0);
+}
+
+// --- Viscous drag (Fig. 10) -------------------------------------------------------------
+
+TEST(ViscousDrag, SphereSinksLessInTheMoreViscousFluid) {
+  const SceneOutput low("drag_low"), high("drag_high");
+  const double y_low = low.body("sphere").pose.back().position.y();
+  const double y_high = high.body("sphere").pose.back().position.y();
+  std::printf("[ drag ] sphere height at t=%.2f s: viscosity 0.1 %.4f m, 3.0 %.4f m\n",
+              low.body("sphere").time.back(), y_low, y_high);
+  EXPECT_GT(y_high, y_low + 0.05);
+  EXPECT_EQ(low.summary()["max_penetrating"].get<int>(), 0);
+  EXPECT_EQ(high.summary()["max_penetrating"].get<int>(), 0);
+}
+
+// --- Sinking ship (Fig. 5) and vessel (Fig. 6): single-layer walls ----------------------
+
+TEST(SinkingShip, FillsAndSinksWithoutLeaks) {
+  const SceneOutput out("sinking_ship");
+  const test::BodyTrack& ship = out.body("ship");
+  const std::size_t last = out.frames() - 1;
+  // The hull's cavity in the ship's frame (walls 2 cm thick, centre of mass 4.5 cm above
+  // the bottom plates' centre): inner faces at |x| = 0.16, |z| = 0.08, floor y = -0.0346.
+  const Vec3 c = Vec3(0.4, 0.31, 0.14) - ship.pose[0].position;  // scene origin in COM frame
+  const Vec3 lo = c + Vec3(-0.16, -0.04, -0.08), hi = c + Vec3(0.16, 0.06, 0.08);
+  const std::size_t inside = countInBodyBox(out, "ship", last, out.frame(last), lo, hi);
+  const double sunk = ship.pose[0].position.y() - ship.pose[last].position.y();
+  std::printf(
+      "[ sinking ship ] sank %.3f m; %zu fluid particles inside the hull; "
+      "max_penetrating %d\n",
+      sunk, inside, out.summary()["max_penetrating"].get<int>());
+  EXPECT_EQ(out.summary()["max_penetrating"].get<int>(), 0);
+  EXPECT_GT(inside, 200u);
+  EXPECT_GT(sunk, 0.1);
+}
+
+TEST(Vessel, FloatsKeepingItsWaterWithoutLeaks) {
+  const SceneOutput out("vessel");
+  const test::BodyTrack& vessel = out.body("vessel");
+  const std::size_t last = out.frames() - 1;
+  const Vec3 c = Vec3(0.3, 0.36, 0.25) - vessel.pose[0].position;
+  const Vec3 lo = c + Vec3(-0.08, -0.05, -0.08), hi = c + Vec3(0.08, 0.07, 0.08);
+  const std::size_t at_start = countInBodyBox(out, "vessel", 0, out.frame(0), lo, hi);
+  const std::size_t at_end = countInBodyBox(out, "vessel", last, out.frame(last), lo, hi);
+  std::printf(
+      "[ vessel ] fluid inside: %zu at the start, %zu at the end; vessel y %.3f m, "
+      "max_penetrating %d\n",
+      at_start, at_end, vessel.pose[last].position.y(),
+      out.summary()["max_penetrating"].get<int>());
+  EXPECT_EQ(out.summary()["max_penetrating"].get<int>(), 0);
+  EXPECT_GT(at_start, 100u);
+  // Water may splash over the rim at the landing, but none drains through the walls.
+  EXPECT_GT(at_end, at_start * 8 / 10);
+  EXPECT_LT(at_end, at_start + at_start / 5);
+  EXPECT_GT(vessel.pose[last].position.y(), 0.1) << "the vessel sank";
+}
+
+// --- Penalty baseline vs direct forcing on the sinking ship (Sec. VI-A) ------------------
+
+struct WallDistance {
+  double mean = 0, spread = 0;  ///< m, over particles near the hull and frames
+  std::size_t samples = 0, inside = 0;
+};
+
+/// Signed distances of the fluid near the ship's hull (closer than 2 r) over the frames
+/// after the first 0.2 s: their mean and standard deviation, and how many were inside.
+WallDistance wallDistance(const SceneOutput& out) {
+  const double r = particleRadius(out);
+  double sum = 0, sum_sq = 0;
+  WallDistance w;
+  for (std::size_t k = 0; k < out.frames(); ++k) {
+    const Frame f = out.frame(k);
+    if (f.time < 0.2) continue;
+    for (const Vec3& x : f.position) {
+      const double d = out.signedDistance("ship", k, x);
+      if (d >= 2.0 * r) continue;
+      sum += d;
+      sum_sq += d * d;
+      ++w.samples;
+      w.inside += d < 0.0;
+    }
+  }
+  w.mean = sum / static_cast<double>(w.samples);
+  w.spread = std::sqrt(std::max(0.0, sum_sq / static_cast<double>(w.samples) - w.mean * w.mean));
+  return w;
+}
+
+TEST(PenaltyBaseline, DirectForcingKeepsFluidOutAndAtASteadyDistance) {
+  const SceneOutput direct("sinking_ship"), penalty("sinking_ship_penalty");
+  const WallDistance d = wallDistance(direct), p = wallDistance(penalty);
+  const double r = particleRadius(direct);
+  std::printf("[ penalty vs direct forcing ] max_penetrating: direct %d, penalty %d\n",
+              direct.summary()["max_penetrating"].get<int>(),
+              penalty.summary()["max_penetrating"].get<int>());
+  std::printf(
+      "[ penalty vs direct forcing ] fluid-to-hull distance (near the hull, after "
+      "0.2 s): direct %.2f r +- %.2f r (%zu samples, %zu inside), "
+      "penalty %.2f r +- %.2f r (%zu samples, %zu inside)\n",
+      d.mean / r, d.spread / r, d.samples, d.inside, p.mean / r, p.spread / r, p.samples, p.inside);
+  std::printf(
+      "[ penalty vs direct forcing ] max density ratio: direct %.3f, penalty %.3f; "
+      "lost: direct %d, penalty %d\n",
+      direct.summary()["max_density_ratio"].get<double>(),
+      penalty.summary()["max_density_ratio"].get<double>(),
+      direct.summary()["lost_particles"].get<int>(),
+      penalty.summary()["lost_particles"].get<int>());
+  EXPECT_EQ(direct.summary()["max_penetrating"].get<int>(), 0);
+  EXPECT_EQ(d.inside, 0u);
+  EXPECT_LT(d.spread, p.spread);
+}
+
+// --- Flotsam (Fig. 12) ------------------------------------------------------------------
+
+TEST(Flotsam, MeshesRideTheWaveAndFloat) {
+  const SceneOutput out("flotsam");
+  EXPECT_EQ(out.summary()["max_penetrating"].get<int>(), 0);
+  for (const char* name : {"ring_buoy", "barrel", "rock", "boat"}) {
+    const test::BodyTrack& t = out.body(name);
+    const Vec3 x0 = t.pose.front().position, x1 = t.pose.back().position;
+    std::printf("[ flotsam ] %s: x %.3f -> %.3f m, y %.3f -> %.3f m\n", name, x0.x(), x1.x(),
+                x0.y(), x1.y());
+    EXPECT_GT(x1.x(), x0.x() + 0.2) << name << " was not carried by the wave";
+    EXPECT_GT(x1.y(), 0.09) << name << " is not afloat";
+  }
+}
+
+}  // namespace
+}  // namespace wake
