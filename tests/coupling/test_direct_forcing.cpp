@@ -83,36 +83,6 @@ TEST(GlobalApproach, RandomContactsAllEndOnTargetWithMomentumBalanced) {
   }
 }
 
-/// A free box in zero gravity hit by a sheet of fluid particles.
-Simulation sheetOnFreeBox(CouplingMethod method, double restitution, int threads = 0) {
-  SimulationSettings s;
-  s.gravity = Vec3::Zero();
-  s.fluid.particle_radius = 0.01;
-  s.fluid.speed_of_sound = 20.0;
-  s.method = method;
-  s.blocks.push_back({Vec3(-0.05, 0.04, -0.05), Vec3(0.07, 0.06, 0.07), Vec3(0.3, -1.0, 0.1)});
-  BodySettings box;
-  box.name = "box";
-  box.kind = BodyKind::Dynamic;
-  box.shape = makeBox(Vec3(0.1, 0.02, 0.1));
-  box.mass = 0.5;
-  box.inertia = Vec3(0.0017, 0.0033, 0.0017);
-  box.restitution = restitution;
-  box.pose.orientation = Quat(Eigen::AngleAxisd(0.2, Vec3::UnitZ()));
-  s.bodies.push_back(box);
-  s.domain = Aabb{Vec3::Constant(-0.5), Vec3::Constant(0.5)};
-  if (threads > 0) omp_set_num_threads(threads);
-  return Simulation(s);
-}
-
-Vec3 totalMomentum(const Simulation& sim, double body_mass) {
-  Vec3 p = body_mass * sim.bodyStates()[0].linear_velocity;
-  const FluidState& st = sim.fluid().state();
-  for (std::size_t i = 0; i < st.size(); ++i)
-    p += sim.fluid().particleMass() * st.velocity[i];
-  return p;
-}
-
 TEST(TwoWay, FluidPlusBodyMomentumIsConservedBothMethods) {
   for (CouplingMethod method : {CouplingMethod::Local, CouplingMethod::Global}) {
     Simulation sim = sheetOnFreeBox(method, 0.0);
