@@ -7,6 +7,7 @@
 #include <hdf5.h>
 
 #include <array>
+#include <cstdint>
 #include <cstdio>
 #include <iomanip>
 #include <sstream>
@@ -212,6 +213,39 @@ struct FrameWriter::Impl {
           "append to a body series");
   }
 
+  /// Each body's boundary samples in its body frame (surface_points, surface_normals) and
+  /// its kind, from the samples at the current pose. Groups in the order of sim.bodyStates().
+  void writeSurfaces(const Simulation& sim) const {
+    const Boundaries& boundaries = sim.boundaries();
+    std::vector<Vec3> position, normal;
+    std::vector<double> volume;
+    std::vector<std::uint32_t> owner;
+    boundaries.worldSamples(position, normal, volume, owner);
+    std::vector<std::vector<Vec3>> points(boundaries.bodyCount()), normals(boundaries.bodyCount());
+    for (std::size_t b = 0; b < boundaries.bodyCount(); ++b) {
+      points[b].reserve(boundaries.bodySampleCount(b));
+      normals[b].reserve(boundaries.bodySampleCount(b));
+    }
+    for (std::size_t k = 0; k < position.size(); ++k) {
+      const std::uint32_t b = owner[k];
+      if (b >= boundaries.bodyCount()) continue;
+      const Pose& pose = boundaries.body(b).pose;
+      points[b].push_back(pose.toBody(position[k]));
+      normals[b].push_back(pose.orientation.conjugate() * normal[k]);
+    }
+    for (std::size_t b = 0; b < boundaries.bodyCount() && b < bodies.size(); ++b) {
+      const hid_t group = bodies[b].group.get();
+      const hsize_t m = points[b].size();
+      writeDataset(group, "surface_points", H5T_NATIVE_DOUBLE, points[b].data(), m, 3);
+      writeDataset(group, "surface_normals", H5T_NATIVE_DOUBLE, normals[b].data(), m, 3);
+      const BodyKind kind = boundaries.body(b).kind;
+      writeAttribute(group, "kind",
+                     std::string(kind == BodyKind::Static      ? "static"
+                                 : kind == BodyKind::Kinematic ? "kinematic"
+                                                               : "dynamic"));
+    }
+  }
+
   /// The XDMF index of all frames so far, its data in the HDF5 file `h5_name` (relative).
   std::string xdmf(const std::string& h5_name) const {
     std::ostringstream x;
@@ -291,6 +325,7 @@ FrameWriter::FrameWriter(const std::string& out_dir, const SceneFile& scene, con
     s.angular_velocity = d.createSeries(s.group.get(), "angular_velocity", 3);
     d.bodies.push_back(std::move(s));
   }
+  d.writeSurfaces(sim);
   d.check(H5Fflush(root, H5F_SCOPE_GLOBAL), "flush the file");
 }
 

@@ -11,6 +11,11 @@
 //                             time (F, s), position (F x 3, m, centre of mass),
 //                             orientation (F x 4, x y z w), linear_velocity (F x 3, m/s),
 //                             angular_velocity (F x 3, rad/s)
+//                           attribute kind ("static", "kinematic" or "dynamic"), and
+//                           written once: surface_points (M x 3, m) and surface_normals
+//                             (M x 3, unit) of the body's M boundary samples in the BODY
+//                             frame (origin = centre of mass; world = orientation * p +
+//                             position); infinite shapes (planes) only within the domain
 //
 // While the run goes on, the files are DIR/<name>.h5.partial and DIR/<name>.xdmf.partial
 // (flushed and rewritten after every frame, so a running or crashed run can be inspected);

@@ -1,10 +1,14 @@
 // `wake`: the headless command line (DESIGN.md §7).
 //
 //   wake run SCENE.json --out DIR [--quiet] [--threads N] [--end T] [--resolution F]
+//   wake render DIR [--out FRAMES_DIR] [--scene NAME] [--color speed|depth] [--width W]
+//               [--height H] [--view iso|front|side|top] [--frames A:B|K] [--every N]
+//               [--max-speed V] [--video] [--quiet] [--threads N]
 //
 // Exit status: 0 success, 2 bad input (scene, options), 1 a run that failed.
 // Every error is one line on stderr: "wake: error: <message>".
 #include "io/files.hpp"
+#include "io/render.hpp"
 #include "io/run.hpp"
 #include "io/scene.hpp"
 
@@ -52,6 +56,32 @@ int main(int argc, char** argv) {
       "--resolution", resolution,
       "Refinement factor F > 0: particle_radius / F, about F^3 times the particles");
 
+  wake::RenderOptions render_options;
+  std::string render_color = "speed", render_view = "iso", render_frames;
+  bool render_quiet = false;
+  int render_threads = 0;
+  CLI::App* render = app.add_subcommand(
+      "render", "Draw a run's frames as PNG images (DIR/frames/<scene>_NNNNNN.png)");
+  render->add_option("dir", render_options.dir, "Output folder of wake run (holds <scene>.h5)")
+      ->required();
+  render->add_option("--out,-o", render_options.out_dir,
+                     "Folder for the PNGs (default DIR/frames)");
+  render->add_option("--scene", render_options.scene, "Which DIR/NAME.h5 when DIR holds several");
+  render->add_option("--color", render_color, "Colour the fluid by speed or depth (default speed)");
+  render->add_option("--width", render_options.width, "Image width in pixels (default 960)");
+  render->add_option("--height", render_options.height, "Image height in pixels (default 540)");
+  render->add_option("--view", render_view, "Camera: iso, front, side or top (default iso)");
+  CLI::Option* frames_option =
+      render->add_option("--frames", render_frames, "Frames to draw: A:B (inclusive) or K");
+  render->add_option("--every", render_options.every, "Draw every N-th frame (default 1)");
+  render->add_option("--max-speed", render_options.max_speed,
+                     "Speed at the top of the colour ramp, m/s (default: 99th percentile)");
+  render->add_flag("--video", render_options.video,
+                   "Also write DIR/<scene>.mp4 with ffmpeg (skipped when ffmpeg is missing)");
+  render->add_flag("--quiet,-q", render_quiet, "No progress output");
+  CLI::Option* render_threads_option =
+      render->add_option("--threads,-j", render_threads, "OpenMP threads (>= 1; default: all)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -60,7 +90,30 @@ int main(int argc, char** argv) {
   }
   if (app.get_subcommands().empty())
     return fail(kExitBadInput,
-                "a subcommand is required: wake run SCENE.json --out DIR (see wake --help)");
+                "a subcommand is required: wake run SCENE.json --out DIR or wake render DIR "
+                "(see wake --help)");
+
+  if (render->parsed()) {
+    try {
+      if (render_threads_option->count() > 0) {
+        if (render_threads < 1)
+          throw wake::SceneError("--threads: must be >= 1 (got " + std::to_string(render_threads) +
+                                 ")");
+        omp_set_num_threads(render_threads);
+      }
+      render_options.color = wake::parseRenderColor(render_color);
+      render_options.view = wake::parseRenderView(render_view);
+      if (frames_option->count() > 0)
+        wake::parseFrameRange(render_frames, render_options.first, render_options.last);
+      if (!render_quiet) render_options.log = &std::cerr;
+      wake::renderRun(render_options);
+      return 0;
+    } catch (const wake::SceneError& e) {
+      return fail(kExitBadInput, e.what());
+    } catch (const std::exception& e) {
+      return fail(kExitRunFailed, e.what());
+    }
+  }
 
   try {
     if (threads_option->count() > 0) {

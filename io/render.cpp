@@ -1,0 +1,823 @@
+// Software preview renderer: HDF5 in (C API), PNG out (stb_image_write). See render.hpp.
+#include "io/render.hpp"
+
+#include "io/scene.hpp"
+
+#include <hdf5.h>
+#include <omp.h>
+#include <stb/stb_image_write.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <limits>
+#include <ostream>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+
+namespace wake {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using Rgb = std::array<float, 3>;
+
+static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 arrays are read as N x 3 doubles");
+
+// ---------------------------------------------------------------------------------------
+// Reading the run (HDF5 is not thread-safe: every read happens on one thread).
+
+/// Owns one HDF5 identifier.
+class Id {
+ public:
+  using Closer = herr_t (*)(hid_t);
+  Id(hid_t id, Closer close) : id_(id), close_(close) {}
+  Id(const Id&) = delete;
+  Id& operator=(const Id&) = delete;
+  ~Id() {
+    if (id_ >= 0) close_(id_);
+  }
+  hid_t get() const { return id_; }
+  bool valid() const { return id_ >= 0; }
+
+ private:
+  hid_t id_;
+  Closer close_;
+};
+
+/// Silences HDF5's error stack printing while in scope.
+class Quiet {
+ public:
+  Quiet() {
+    H5Eget_auto2(H5E_DEFAULT, &func_, &data_);
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  }
+  ~Quiet() { H5Eset_auto2(H5E_DEFAULT, func_, data_); }
+  Quiet(const Quiet&) = delete;
+  Quiet& operator=(const Quiet&) = delete;
+
+ private:
+  H5E_auto2_t func_ = nullptr;
+  void* data_ = nullptr;
+};
+
+struct BodyData {
+  std::string name, kind;
+  std::vector<Vec3> points, normals;  ///< body frame
+  std::vector<Vec3> position;         ///< per frame
+  std::vector<Quat> orientation;      ///< per frame
+  Pose pose(std::size_t frame) const {
+    Pose p;
+    if (position.empty()) return p;
+    const std::size_t k = std::min(frame, position.size() - 1);
+    p.position = position[k];
+    if (k < orientation.size()) p.orientation = orientation[k];
+    return p;
+  }
+};
+
+struct FrameData {
+  std::size_t index = 0;
+  std::vector<Vec3> position, velocity;
+};
+
+class RunFile {
+ public:
+  explicit RunFile(const std::string& path)
+      : path_(path), file_(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose) {
+    if (!file_.valid()) throw SceneError(path + ": cannot open (not an HDF5 file?)");
+  }
+
+  double rootDouble(const char* name, double fallback) const {
+    if (H5Aexists(file_.get(), name) <= 0) return fallback;
+    const Id attr(H5Aopen(file_.get(), name, H5P_DEFAULT), H5Aclose);
+    double value = fallback;
+    if (!attr.valid() || H5Aread(attr.get(), H5T_NATIVE_DOUBLE, &value) < 0)
+      fail("read attribute " + std::string(name));
+    return value;
+  }
+
+  static std::string stringAttribute(hid_t object, const char* name) {
+    if (H5Aexists(object, name) <= 0) return "";
+    const Id attr(H5Aopen(object, name, H5P_DEFAULT), H5Aclose);
+    if (!attr.valid()) return "";
+    const Id type(H5Aget_type(attr.get()), H5Tclose);
+    if (!type.valid() || H5Tget_class(type.get()) != H5T_STRING) return "";
+    if (H5Tis_variable_str(type.get()) > 0) {
+      char* text = nullptr;
+      if (H5Aread(attr.get(), type.get(), &text) < 0 || text == nullptr) return "";
+      std::string out(text);
+      H5free_memory(text);
+      return out;
+    }
+    std::string out(H5Tget_size(type.get()), '\0');
+    if (out.empty() || H5Aread(attr.get(), type.get(), &out[0]) < 0) return "";
+    out.resize(std::strlen(out.c_str()));
+    return out;
+  }
+
+  std::size_t frameCount() const {
+    if (H5Lexists(file_.get(), "frames", H5P_DEFAULT) <= 0) fail("find the group /frames");
+    const Id group(H5Gopen2(file_.get(), "frames", H5P_DEFAULT), H5Gclose);
+    H5G_info_t info;
+    if (!group.valid() || H5Gget_info(group.get(), &info) < 0) fail("read the group /frames");
+    return static_cast<std::size_t>(info.nlinks);
+  }
+
+  void readFrame(std::size_t k, FrameData& out, bool positions, bool velocities) const {
+    char name[48];
+    std::snprintf(name, sizeof(name), "frames/%06zu", k);
+    const Id group(H5Gopen2(file_.get(), name, H5P_DEFAULT), H5Gclose);
+    if (!group.valid()) fail(std::string("open /") + name);
+    out.index = k;
+    if (positions) readRows(group.get(), "position", 3, name, out.position);
+    if (velocities) readRows(group.get(), "velocity", 3, name, out.velocity);
+  }
+
+  std::vector<BodyData> readBodies() const {
+    std::vector<BodyData> out;
+    if (H5Lexists(file_.get(), "bodies", H5P_DEFAULT) <= 0) return out;
+    const Id bodies(H5Gopen2(file_.get(), "bodies", H5P_DEFAULT), H5Gclose);
+    H5G_info_t info;
+    if (!bodies.valid() || H5Gget_info(bodies.get(), &info) < 0) fail("read the group /bodies");
+    for (hsize_t i = 0; i < info.nlinks; ++i) {
+      const ssize_t size = H5Lget_name_by_idx(bodies.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i,
+                                              nullptr, 0, H5P_DEFAULT);
+      if (size < 0) fail("list /bodies");
+      std::string body_name(static_cast<std::size_t>(size) + 1, '\0');
+      H5Lget_name_by_idx(bodies.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, &body_name[0],
+                         body_name.size(), H5P_DEFAULT);
+      body_name.resize(static_cast<std::size_t>(size));
+      const Id group(H5Gopen2(bodies.get(), body_name.c_str(), H5P_DEFAULT), H5Gclose);
+      if (!group.valid()) fail("open /bodies/" + body_name);
+      BodyData b;
+      b.name = body_name;
+      b.kind = stringAttribute(group.get(), "kind");
+      const std::string where = "bodies/" + body_name;
+      // Files written before surface_points existed have no surfaces: nothing to draw.
+      if (H5Lexists(group.get(), "surface_points", H5P_DEFAULT) > 0 &&
+          H5Lexists(group.get(), "surface_normals", H5P_DEFAULT) > 0) {
+        readRows(group.get(), "surface_points", 3, where, b.points);
+        readRows(group.get(), "surface_normals", 3, where, b.normals);
+        if (b.normals.size() != b.points.size())
+          fail("match /" + where + "/surface_normals to surface_points");
+      }
+      readRows(group.get(), "position", 3, where, b.position);
+      std::vector<double> xyzw;
+      readFlat(group.get(), "orientation", 4, where, xyzw);
+      for (std::size_t f = 0; f + 3 < xyzw.size(); f += 4)
+        b.orientation.push_back(Quat(xyzw[f + 3], xyzw[f], xyzw[f + 1], xyzw[f + 2]).normalized());
+      out.push_back(std::move(b));
+    }
+    return out;
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const {
+    throw SceneError(path_ + ": cannot " + what);
+  }
+
+  /// Reads dataset `name` of rows x cols doubles into `out` (row-major).
+  void readFlat(hid_t group, const char* name, hsize_t cols, const std::string& where,
+                std::vector<double>& out) const {
+    const std::string full = "/" + where + "/" + name;
+    const Id set(H5Dopen2(group, name, H5P_DEFAULT), H5Dclose);
+    if (!set.valid()) fail("open dataset " + full);
+    const Id space(H5Dget_space(set.get()), H5Sclose);
+    hsize_t dims[2] = {0, 0};
+    const int rank = space.valid() ? H5Sget_simple_extent_ndims(space.get()) : -1;
+    if (rank < 1 || rank > 2) fail("read dataset " + full + " (unexpected shape)");
+    H5Sget_simple_extent_dims(space.get(), dims, nullptr);
+    if (rank == 2 ? dims[1] != cols : (dims[0] != 0 || cols != 1))
+      fail("read dataset " + full + " (expected " + std::to_string(cols) + " columns)");
+    out.assign(static_cast<std::size_t>(dims[0] * cols), 0.0);
+    if (!out.empty() &&
+        H5Dread(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) < 0)
+      fail("read dataset " + full);
+  }
+
+  void readRows(hid_t group, const char* name, hsize_t cols, const std::string& where,
+                std::vector<Vec3>& out) const {
+    std::vector<double> flat;
+    readFlat(group, name, cols, where, flat);
+    out.resize(flat.size() / 3);
+    for (std::size_t i = 0; i < out.size(); ++i)
+      out[i] = Vec3(flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]);
+  }
+
+  std::string path_;
+  Id file_;
+};
+
+// ---------------------------------------------------------------------------------------
+// Colours.
+
+Rgb ramp(const Rgb* stops, int count, double t) {
+  if (!(t > 0)) return stops[0];
+  if (t >= 1) return stops[count - 1];
+  const double x = t * (count - 1);
+  const int i = std::min(static_cast<int>(x), count - 2);
+  const float f = static_cast<float>(x - i);
+  Rgb c;
+  for (int j = 0; j < 3; ++j)
+    c[j] = stops[i][j] + f * (stops[i + 1][j] - stops[i][j]);
+  return c;
+}
+
+/// Deep blue (still) to near white (fast).
+Rgb waterRamp(double t) {
+  static const Rgb stops[] = {
+      {0.05f, 0.20f, 0.52f}, {0.10f, 0.42f, 0.82f}, {0.38f, 0.74f, 0.96f}, {0.93f, 0.97f, 1.00f}};
+  return ramp(stops, 4, t);
+}
+
+/// Viridis-like: purple (near) to yellow (far).
+Rgb viridisRamp(double t) {
+  static const Rgb stops[] = {{0.267f, 0.005f, 0.329f},
+                              {0.229f, 0.322f, 0.546f},
+                              {0.128f, 0.567f, 0.551f},
+                              {0.369f, 0.789f, 0.383f},
+                              {0.993f, 0.906f, 0.144f}};
+  return ramp(stops, 5, t);
+}
+
+Rgb bodyColor(const std::string& kind, std::size_t nth_of_kind) {
+  static const Rgb warm[] = {{0.93f, 0.45f, 0.12f},
+                             {0.85f, 0.18f, 0.15f},
+                             {0.95f, 0.70f, 0.10f},
+                             {0.78f, 0.25f, 0.45f},
+                             {0.70f, 0.35f, 0.10f}};
+  static const Rgb kinematic[] = {{0.25f, 0.65f, 0.30f}, {0.45f, 0.30f, 0.70f}};
+  static const Rgb grey[] = {{0.80f, 0.80f, 0.82f}, {0.68f, 0.69f, 0.71f}, {0.86f, 0.85f, 0.80f}};
+  if (kind == "static") return grey[nth_of_kind % 3];
+  if (kind == "kinematic") return kinematic[nth_of_kind % 2];
+  return warm[nth_of_kind % 5];
+}
+
+// ---------------------------------------------------------------------------------------
+// Rasterizer.
+
+struct Image {
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> rgb;
+  std::vector<float> depth;
+
+  void clear() {
+    rgb.resize(static_cast<std::size_t>(width) * height * 3);
+    depth.assign(static_cast<std::size_t>(width) * height, std::numeric_limits<float>::infinity());
+    for (int y = 0; y < height; ++y) {
+      const std::array<std::uint8_t, 3> bg = renderBackground(y, height);
+      std::uint8_t* row = &rgb[static_cast<std::size_t>(y) * width * 3];
+      for (int x = 0; x < width; ++x)
+        for (int j = 0; j < 3; ++j)
+          row[3 * x + j] = bg[j];
+    }
+  }
+};
+
+std::uint8_t toByte(float v) {
+  return static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
+}
+
+/// The light, in camera coordinates (x right, y up, z away from the viewer).
+struct Light {
+  Vec3 dir = Vec3(-0.35, 0.75, -0.55).normalized();
+  Vec3 half = (Vec3(-0.35, 0.75, -0.55).normalized() + Vec3(0, 0, -1)).normalized();
+};
+
+/// A sphere impostor of world radius `radius` at p: per-pixel sphere normal and depth.
+void drawSphere(Image& im, const RenderCamera& cam, const Light& light, const Vec3& p,
+                double radius, const Rgb& color) {
+  double sx, sy, z;
+  if (!cam.project(p, sx, sy, z) || z <= radius) return;
+  const double rp = std::max(0.7, cam.focal * radius / z);
+  const int x0 = std::max(0, static_cast<int>(std::floor(sx - rp)));
+  const int x1 = std::min(im.width - 1, static_cast<int>(std::ceil(sx + rp)));
+  const int y0 = std::max(0, static_cast<int>(std::floor(sy - rp)));
+  const int y1 = std::min(im.height - 1, static_cast<int>(std::ceil(sy + rp)));
+  if (x0 > x1 || y0 > y1) return;
+  const double inv = 1.0 / rp;
+  for (int y = y0; y <= y1; ++y) {
+    const double dy = (y + 0.5 - sy) * inv;
+    for (int x = x0; x <= x1; ++x) {
+      const double dx = (x + 0.5 - sx) * inv;
+      const double d2 = dx * dx + dy * dy;
+      if (d2 >= 1.0) continue;
+      const double nz = std::sqrt(1.0 - d2);
+      const float depth = static_cast<float>(z - radius * nz);
+      const std::size_t at = static_cast<std::size_t>(y) * im.width + x;
+      if (depth >= im.depth[at]) continue;
+      im.depth[at] = depth;
+      const Vec3 n(dx, -dy, -nz);
+      const double lambert = std::max(0.0, n.dot(light.dir));
+      const double spec = std::pow(std::max(0.0, n.dot(light.half)), 40.0);
+      const float shade = static_cast<float>(0.38 + 0.62 * lambert);
+      const float highlight = static_cast<float>(0.35 * spec);
+      std::uint8_t* out = &im.rgb[3 * at];
+      for (int j = 0; j < 3; ++j)
+        out[j] = toByte(color[j] * shade + highlight);
+    }
+  }
+}
+
+/// A surface splat: a disc of world radius `radius` at p in the plane normal to n (world),
+/// ray-traced per pixel so that surfaces seen at a slant stay flat; shaded with n.
+void drawSplat(Image& im, const RenderCamera& cam, const Light& light, const Vec3& p, double radius,
+               const Vec3& n, const Rgb& color) {
+  double sx, sy, z;
+  if (!cam.project(p, sx, sy, z) || z <= radius) return;
+  const double rp = std::max(0.7, cam.focal * radius / z);
+  const int x0 = std::max(0, static_cast<int>(std::floor(sx - rp)));
+  const int x1 = std::min(im.width - 1, static_cast<int>(std::ceil(sx + rp)));
+  const int y0 = std::max(0, static_cast<int>(std::floor(sy - rp)));
+  const int y1 = std::min(im.height - 1, static_cast<int>(std::ceil(sy + rp)));
+  if (x0 > x1 || y0 > y1) return;
+  // Camera coordinates (x right, y up, z forward): the splat's centre c and normal m.
+  const Vec3 c(z * (sx - 0.5 * im.width) / cam.focal, -z * (sy - 0.5 * im.height) / cam.focal, z);
+  Vec3 m(n.dot(cam.right), n.dot(cam.up), n.dot(cam.forward));
+  if (m.z() > 0) m = -m;  // two-sided: the face towards the viewer
+  const double lambert = std::max(0.0, m.dot(light.dir));
+  const float shade = static_cast<float>(0.42 + 0.58 * lambert);
+  const std::array<std::uint8_t, 3> rgb = {toByte(color[0] * shade), toByte(color[1] * shade),
+                                           toByte(color[2] * shade)};
+  const double mc = m.dot(c), r2 = radius * radius, inv_f = 1.0 / cam.focal;
+  const double hw = 0.5 * im.width, hh = 0.5 * im.height;
+  for (int y = y0; y <= y1; ++y) {
+    const double ry = -(y + 0.5 - hh) * inv_f;
+    for (int x = x0; x <= x1; ++x) {
+      const double rx = (x + 0.5 - hw) * inv_f;
+      // The pixel's ray is t * (rx, ry, 1); it meets the splat's plane at t = depth.
+      const double mr = m.x() * rx + m.y() * ry + m.z();
+      if (std::abs(mr) < 1e-3) continue;
+      const double t = mc / mr;
+      const double ex = t * rx - c.x(), ey = t * ry - c.y(), ez = t - c.z();
+      if (t <= 0 || ex * ex + ey * ey + ez * ez >= r2) continue;
+      const std::size_t at = static_cast<std::size_t>(y) * im.width + x;
+      const float depth = static_cast<float>(t);
+      if (depth >= im.depth[at]) continue;
+      im.depth[at] = depth;
+      std::uint8_t* out = &im.rgb[3 * at];
+      out[0] = rgb[0];
+      out[1] = rgb[1];
+      out[2] = rgb[2];
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Scene statistics and the camera.
+
+/// Value at quantile q in [0, 1] of `v` (reordered).
+double quantile(std::vector<double>& v, double q) {
+  if (v.empty()) return 0.0;
+  const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * (v.size() - 1) + 0.5));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
+/// Robust bounds of a particle cloud: per axis the 0.2 % and 99.8 % quantiles.
+Aabb robustBounds(const std::vector<Vec3>& x) {
+  Aabb box;
+  if (x.empty()) return box;
+  std::vector<double> v(x.size());
+  for (int axis = 0; axis < 3; ++axis) {
+    for (std::size_t i = 0; i < x.size(); ++i)
+      v[i] = x[i][axis];
+    box.min[axis] = quantile(v, 0.002);
+    box.max[axis] = quantile(v, 0.998);
+  }
+  return box;
+}
+
+Vec3 viewDirection(RenderView view) {  // from the scene's centre towards the eye
+  switch (view) {
+    case RenderView::Front:
+      return Vec3(0, 0, 1);
+    case RenderView::Side:
+      return Vec3(1, 0, 0);
+    case RenderView::Top:
+      return Vec3(0, 1, 0);
+    case RenderView::Iso:
+      break;
+  }
+  return Vec3(0.55, 0.62, 1.0).normalized();
+}
+
+RenderCamera fitCamera(const Aabb& box, RenderView view, int width, int height) {
+  RenderCamera cam;
+  cam.width = width;
+  cam.height = height;
+  const Vec3 d = viewDirection(view);
+  const Vec3 world_up = view == RenderView::Top ? Vec3(0, 0, -1) : Vec3(0, 1, 0);
+  cam.forward = -d;
+  cam.right = cam.forward.cross(world_up).normalized();
+  cam.up = cam.right.cross(cam.forward).normalized();
+  const double tan_v = std::tan(0.5 * 35.0 * M_PI / 180.0);
+  const double tan_h = tan_v * width / height;
+  cam.focal = 0.5 * height / tan_v;
+  const Vec3 centre = 0.5 * (box.min + box.max);
+  const double size = std::max((box.max - box.min).norm(), 1e-6);
+  double distance = 0.0;
+  for (int k = 0; k < 8; ++k) {
+    const Vec3 q = box.corner(k) - centre;
+    const double towards = q.dot(d);
+    distance = std::max(distance, towards + std::abs(q.dot(cam.right)) / tan_h);
+    distance = std::max(distance, towards + std::abs(q.dot(cam.up)) / tan_v);
+  }
+  distance = std::max(distance * 1.06, 0.6 * size);
+  cam.eye = centre + distance * d;
+  return cam;
+}
+
+/// Everything that stays the same over the frames of one render.
+struct Plan {
+  RenderCamera camera;
+  Light light;
+  double radius = 0;       ///< fluid particle radius, m
+  double body_radius = 0;  ///< radius of a drawn body sample, m
+  double max_speed = 1;
+  double near_depth = 0, far_depth = 1;  ///< depth ramp range
+  RenderColor color = RenderColor::Speed;
+  std::vector<BodyData> bodies;
+  std::vector<Rgb> body_colors;
+  std::vector<std::vector<std::uint8_t>> visible;  ///< per static body sample (cut-away)
+};
+
+void renderFrame(const Plan& plan, const FrameData& frame, Image& im) {
+  im.clear();
+  const RenderCamera& cam = plan.camera;
+  for (std::size_t b = 0; b < plan.bodies.size(); ++b) {
+    const BodyData& body = plan.bodies[b];
+    const Pose pose = body.pose(frame.index);
+    const std::vector<std::uint8_t>& visible = plan.visible[b];
+    for (std::size_t k = 0; k < body.points.size(); ++k) {
+      if (!visible.empty() && !visible[k]) continue;
+      drawSplat(im, cam, plan.light, pose.toWorld(body.points[k]), plan.body_radius,
+                pose.rotate(body.normals[k]), plan.body_colors[b]);
+    }
+  }
+  const bool by_speed =
+      plan.color == RenderColor::Speed && frame.velocity.size() == frame.position.size();
+  const double depth_scale = 1.0 / std::max(1e-12, plan.far_depth - plan.near_depth);
+  for (std::size_t i = 0; i < frame.position.size(); ++i) {
+    const Vec3& p = frame.position[i];
+    Rgb color;
+    if (by_speed) {
+      color = waterRamp(frame.velocity[i].norm() / plan.max_speed);
+    } else {
+      color = viridisRamp(((p - cam.eye).dot(cam.forward) - plan.near_depth) * depth_scale);
+    }
+    drawSphere(im, cam, plan.light, p, plan.radius, color);
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Files and ffmpeg.
+
+std::string findH5(const RenderOptions& o) {
+  std::error_code ec;
+  if (!fs::is_directory(o.dir, ec))
+    throw SceneError(o.dir + ": not a folder (wake render DIR: the --out folder of wake run)");
+  if (!o.scene.empty()) {
+    const fs::path p = fs::path(o.dir) / (o.scene + ".h5");
+    if (!fs::is_regular_file(p, ec)) throw SceneError("--scene: " + p.string() + " does not exist");
+    return p.string();
+  }
+  std::vector<std::string> found;
+  for (const fs::directory_entry& e : fs::directory_iterator(o.dir, ec))
+    if (e.path().extension() == ".h5" && e.is_regular_file(ec)) found.push_back(e.path().string());
+  std::sort(found.begin(), found.end());
+  if (found.empty())
+    throw SceneError(o.dir + ": no <scene>.h5 file in this folder (run wake run first)");
+  if (found.size() > 1)
+    throw SceneError(o.dir + ": " + std::to_string(found.size()) +
+                     " .h5 files in this folder; pick one with --scene NAME");
+  return found.front();
+}
+
+std::string shellQuote(const std::string& s) {
+  std::string out = "'";
+  for (const char c : s) {
+    if (c == '\'')
+      out += "'\\''";
+    else
+      out += c;
+  }
+  return out + "'";
+}
+
+bool onPath(const std::string& program) {
+  const char* path = std::getenv("PATH");
+  if (!path) return false;
+  std::stringstream dirs(path);
+  std::string dir;
+  while (std::getline(dirs, dir, ':')) {
+    if (dir.empty()) dir = ".";
+    const std::string candidate = dir + "/" + program;
+    if (access(candidate.c_str(), X_OK) == 0) return true;
+  }
+  return false;
+}
+
+std::string frameFile(const std::string& out_dir, const std::string& scene, std::size_t k) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "_%06zu.png", k);
+  return (fs::path(out_dir) / (scene + buf)).string();
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+
+bool RenderCamera::project(const Vec3& p, double& sx, double& sy, double& depth) const {
+  const Vec3 v = p - eye;
+  depth = v.dot(forward);
+  if (depth <= 1e-9) return false;
+  sx = 0.5 * width + focal * v.dot(right) / depth;
+  sy = 0.5 * height - focal * v.dot(up) / depth;
+  return true;
+}
+
+std::array<std::uint8_t, 3> renderBackground(int y, int height) {
+  const float t = height > 1 ? static_cast<float>(y) / static_cast<float>(height - 1) : 0.0f;
+  const Rgb top = {0.96f, 0.97f, 0.99f}, bottom = {0.80f, 0.84f, 0.89f};
+  return {toByte(top[0] + t * (bottom[0] - top[0])), toByte(top[1] + t * (bottom[1] - top[1])),
+          toByte(top[2] + t * (bottom[2] - top[2]))};
+}
+
+RenderColor parseRenderColor(const std::string& value, const std::string& option) {
+  if (value == "speed") return RenderColor::Speed;
+  if (value == "depth") return RenderColor::Depth;
+  throw SceneError(option + ": must be speed or depth (got \"" + value + "\")");
+}
+
+RenderView parseRenderView(const std::string& value, const std::string& option) {
+  if (value == "iso") return RenderView::Iso;
+  if (value == "front") return RenderView::Front;
+  if (value == "side") return RenderView::Side;
+  if (value == "top") return RenderView::Top;
+  throw SceneError(option + ": must be iso, front, side or top (got \"" + value + "\")");
+}
+
+void parseFrameRange(const std::string& value, long& first, long& last, const std::string& option) {
+  auto number = [&](const std::string& s) {
+    std::size_t used = 0;
+    long v = -1;
+    try {
+      v = std::stol(s, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (s.empty() || used != s.size() || v < 0)
+      throw SceneError(option +
+                       ": expected a frame K or a range A:B of frame numbers >= 0 (got \"" + value +
+                       "\")");
+    return v;
+  };
+  const auto colon = value.find(':');
+  if (colon == std::string::npos) {
+    first = last = number(value);
+    return;
+  }
+  first = number(value.substr(0, colon));
+  last = number(value.substr(colon + 1));
+  if (last < first) throw SceneError(option + ": the range " + value + " ends before it starts");
+}
+
+RenderResult renderRun(const RenderOptions& o) {
+  const Clock::time_point start = Clock::now();
+  const Quiet quiet;
+  if (o.width < 16 || o.width > 8192)
+    throw SceneError("--width: must be in [16, 8192] pixels (got " + std::to_string(o.width) + ")");
+  if (o.height < 16 || o.height > 8192)
+    throw SceneError("--height: must be in [16, 8192] pixels (got " + std::to_string(o.height) +
+                     ")");
+  if (o.every < 1) throw SceneError("--every: must be >= 1 (got " + std::to_string(o.every) + ")");
+  if (!(o.max_speed >= 0) || !std::isfinite(o.max_speed))
+    throw SceneError("--max-speed: must be a finite speed > 0 in m/s");
+
+  RenderResult result;
+  result.h5_path = findH5(o);
+  const RunFile file(result.h5_path);
+  const std::string scene = fs::path(result.h5_path).stem().string();  // names the frames
+  const std::size_t frames = file.frameCount();
+  if (frames == 0) throw SceneError(result.h5_path + ": the run has no frames");
+  const long last_frame = static_cast<long>(frames) - 1;
+  const long first = o.first;
+  const long last = o.last < 0 ? last_frame : o.last;
+  if (first > last_frame || last > last_frame)
+    throw SceneError("--frames: frame " + std::to_string(std::max(first, last)) +
+                     " is out of range (" + result.h5_path + " has frames 0.." +
+                     std::to_string(last_frame) + ")");
+
+  Plan plan;
+  plan.color = o.color;
+  plan.radius = file.rootDouble("particle_radius", 0.01);
+  if (!(plan.radius > 0)) plan.radius = 0.01;
+  // Body samples lie on a lattice of the fluid's spacing 2r: splats of radius 0.75 * 2r
+  // close the surface.
+  plan.body_radius = 1.5 * plan.radius;
+  const double frame_rate = file.rootDouble("frame_rate", 30.0);
+  plan.bodies = file.readBodies();
+
+  // Statistics over up to 48 frames spread over the whole run (not only the rendered
+  // ones, so that every render of a run has the same camera and colour scale).
+  Aabb fluid_box;
+  std::vector<double> speeds;
+  double speed_scale = 0.0;
+  {
+    const std::size_t samples = std::min<std::size_t>(frames, 48);
+    FrameData f;
+    for (std::size_t s = 0; s < samples; ++s) {
+      const std::size_t k = samples == 1 ? 0 : s * (frames - 1) / (samples - 1);
+      file.readFrame(k, f, true, o.max_speed == 0);
+      fluid_box.extend(robustBounds(f.position));
+      if (o.max_speed == 0 && !f.velocity.empty()) {
+        speeds.resize(f.velocity.size());
+        for (std::size_t i = 0; i < speeds.size(); ++i)
+          speeds[i] = f.velocity[i].norm();
+        speed_scale = std::max(speed_scale, quantile(speeds, 0.99));
+      }
+    }
+  }
+  plan.max_speed = o.max_speed > 0 ? o.max_speed : std::max(speed_scale, 0.05);
+  result.max_speed = plan.max_speed;
+
+  // The camera's box: the fluid, the moving bodies wherever they go, static bodies that
+  // hold them (a tank) and the parts of other static bodies near them (an infinite plane
+  // is sampled over the whole domain).
+  Aabb box = fluid_box;
+  std::vector<Aabb> static_bounds(plan.bodies.size());
+  for (std::size_t b = 0; b < plan.bodies.size(); ++b) {
+    const BodyData& body = plan.bodies[b];
+    Aabb local;
+    for (const Vec3& p : body.points)
+      local.extend(p);
+    if (local.empty()) continue;
+    if (body.kind == "static") {
+      static_bounds[b] = transformBounds(local, body.pose(0), true);
+    } else {
+      const std::size_t n = std::max<std::size_t>(body.position.size(), 1);
+      for (std::size_t k = 0; k < n; k += std::max<std::size_t>(1, n / 64))
+        box.extend(transformBounds(local, body.pose(k), true));
+      box.extend(transformBounds(local, body.pose(n - 1), true));
+    }
+  }
+  if (box.empty()) {  // no fluid and no moving body
+    for (const Aabb& s : static_bounds)
+      box.extend(s);
+  } else {
+    const double grow = std::max((box.max - box.min).maxCoeff(), 4 * plan.radius);
+    Aabb reach = box;
+    reach.min.array() -= grow;
+    reach.max.array() += grow;
+    const Vec3 centre = 0.5 * (box.min + box.max);
+    for (const Aabb& s : static_bounds) {
+      if (s.empty()) continue;
+      if (s.contains(centre)) {  // a container (tank): all of it
+        box.extend(s);
+        continue;
+      }
+      Aabb clipped;
+      clipped.min = s.min.cwiseMax(reach.min);
+      clipped.max = s.max.cwiseMin(reach.max);
+      box.extend(clipped);
+    }
+  }
+  if (box.empty()) box.extend(Vec3::Zero());
+  box.min.array() -= plan.radius;
+  box.max.array() += plan.radius;
+  plan.camera = fitCamera(box, o.view, o.width, o.height);
+  result.camera = plan.camera;
+  {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (int k = 0; k < 8; ++k) {
+      const double z = (fluid_box.empty() ? box : fluid_box).corner(k).dot(plan.camera.forward) -
+                       plan.camera.eye.dot(plan.camera.forward);
+      lo = std::min(lo, z);
+      hi = std::max(hi, z);
+    }
+    plan.near_depth = lo;
+    plan.far_depth = hi;
+  }
+
+  // Colours, and the cut-away of containers: a static body whose bounds hold the fluid's
+  // centre loses the samples on the camera's side of its own centre (along each sample's
+  // normal), e.g. a tank keeps its floor and back walls but not its front wall.
+  const Vec3 fluid_centre =
+      fluid_box.empty() ? 0.5 * (box.min + box.max) : Vec3(0.5 * (fluid_box.min + fluid_box.max));
+  std::size_t counts[3] = {0, 0, 0};
+  plan.visible.resize(plan.bodies.size());
+  for (std::size_t b = 0; b < plan.bodies.size(); ++b) {
+    const BodyData& body = plan.bodies[b];
+    const int kind = body.kind == "static" ? 0 : body.kind == "kinematic" ? 1 : 2;
+    plan.body_colors.push_back(bodyColor(body.kind, counts[kind]++));
+    const Aabb& s = static_bounds[b];
+    if (kind != 0 || s.empty() || !s.contains(fluid_centre)) continue;
+    const Vec3 centre = 0.5 * (s.min + s.max);
+    const Vec3 to_eye = (plan.camera.eye - centre).normalized();
+    const Pose pose = body.pose(0);
+    std::vector<std::uint8_t>& visible = plan.visible[b];
+    visible.assign(body.points.size(), 1);
+    for (std::size_t k = 0; k < body.points.size(); ++k) {
+      const Vec3 n = pose.rotate(body.normals[k]);
+      const double facing = n.dot(to_eye);
+      const double side = n.dot(pose.toWorld(body.points[k]) - centre);
+      if (std::abs(facing) > 0.2 && facing * side > 0) visible[k] = 0;
+    }
+  }
+
+  // Frames: read in batches on one thread, drawn and written in parallel.
+  std::error_code ec;
+  const std::string out_dir = o.out_dir.empty() ? (fs::path(o.dir) / "frames").string() : o.out_dir;
+  fs::create_directories(out_dir, ec);
+  if (!fs::is_directory(out_dir, ec))
+    throw SceneError("--out: cannot create the folder " + out_dir);
+  std::vector<std::size_t> selected;
+  for (long k = first; k <= last; k += o.every)
+    selected.push_back(static_cast<std::size_t>(k));
+  const std::size_t batch = static_cast<std::size_t>(std::max(1, 2 * omp_get_max_threads()));
+  std::vector<FrameData> data;
+  std::vector<std::string> errors;
+  for (std::size_t b0 = 0; b0 < selected.size(); b0 += batch) {
+    const std::size_t n = std::min(batch, selected.size() - b0);
+    data.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+      file.readFrame(selected[b0 + i], data[i], true, o.color == RenderColor::Speed);
+    errors.assign(n, std::string());
+#pragma omp parallel
+    {
+      Image im;
+      im.width = o.width;
+      im.height = o.height;
+#pragma omp for schedule(dynamic, 1)
+      for (long i = 0; i < static_cast<long>(n); ++i) {
+        try {
+          renderFrame(plan, data[static_cast<std::size_t>(i)], im);
+          const std::string path =
+              frameFile(out_dir, scene, data[static_cast<std::size_t>(i)].index);
+          if (stbi_write_png(path.c_str(), im.width, im.height, 3, im.rgb.data(), im.width * 3) ==
+              0)
+            errors[static_cast<std::size_t>(i)] = "cannot write " + path;
+        } catch (const std::exception& e) {
+          errors[static_cast<std::size_t>(i)] = e.what();
+        }
+      }
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!errors[i].empty()) throw std::runtime_error(errors[i]);
+      result.images.push_back(frameFile(out_dir, scene, data[i].index));
+    }
+  }
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  result.seconds_per_frame = seconds / static_cast<double>(selected.size());
+  if (o.log) {
+    char line[160];
+    std::snprintf(line, sizeof(line), "%zu frame%s, %.0f ms per frame, speed scale %.3g m/s",
+                  selected.size(), selected.size() == 1 ? "" : "s",
+                  1000.0 * result.seconds_per_frame, plan.max_speed);
+    *o.log << "[wake] rendered " << out_dir << "/" << scene << "_*.png: " << line << std::endl;
+  }
+
+  if (o.video) {
+    if (!onPath("ffmpeg")) {
+      if (o.log) *o.log << "[wake] video skipped: ffmpeg is not on PATH" << std::endl;
+      return result;
+    }
+    // ffmpeg reads a numbered sequence without gaps: with --every > 1 it gets one made of
+    // links in a scratch folder.
+    std::string pattern = (fs::path(out_dir) / (scene + "_%06d.png")).string();
+    double rate = frame_rate > 0 ? frame_rate : 30.0;
+    std::size_t start_number = selected.front();
+    const fs::path links = fs::path(out_dir) / (".video_" + scene);
+    if (o.every > 1) {
+      fs::remove_all(links, ec);
+      fs::create_directories(links, ec);
+      for (std::size_t i = 0; i < result.images.size(); ++i)
+        fs::create_symlink(fs::absolute(result.images[i], ec), frameFile(links, scene, i), ec);
+      pattern = (links / (scene + "_%06d.png")).string();
+      rate /= static_cast<double>(o.every);
+      start_number = 0;
+    }
+    const std::string video = (fs::path(o.dir) / (scene + ".mp4")).string();
+    std::ostringstream cmd;
+    cmd << "ffmpeg -y -loglevel error -framerate " << rate << " -start_number " << start_number
+        << " -i " << shellQuote(pattern) << " -frames:v " << selected.size()
+        << " -pix_fmt yuv420p -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' " << shellQuote(video);
+    const int status = std::system(cmd.str().c_str());
+    if (o.every > 1) fs::remove_all(links, ec);
+    if (status != 0) throw std::runtime_error("ffmpeg failed to write " + video);
+    result.video = video;
+    if (o.log) *o.log << "[wake] video " << video << std::endl;
+  }
+  return result;
+}
+
+}  // namespace wake
