@@ -84,6 +84,7 @@ SceneOutput::SceneOutput(const std::string& name)
     }
   }
   world_ = std::make_unique<SceneWorld>(scene_.sim, scene_.bodies);
+  world_->coupled().start();  // builds the simulation, which holds the exact shapes
 }
 
 SceneOutput::~SceneOutput() = default;

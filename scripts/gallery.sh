@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# README's gallery, made with Wake's own commands: plays every demo scene in
+# demos/scenes/ at its default resolution (wake run), draws one chosen frame of each
+# (wake render) into demos/gallery/<scene>.png and plots the time series of a few
+# (scripts/plot.sh) into demos/gallery/<scene>_<plot>.png.
+#
+#   bash scripts/gallery.sh [SCENE...]      (default: every scene; needs a build in build/)
+#
+# The runs go to out/gallery/<scene>/. Takes about 10 minutes on 2 cores.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+wake=./build/io/wake
+[[ -x "$wake" ]] || { echo "gallery.sh: error: build first (bash scripts/build.sh)" >&2; exit 1; }
+
+# The time (s) of the still for each scene: the moment that shows what the scene is about.
+declare -A still=(
+  [stone_skipping]=0.2 [stone_skipping_local]=0.2 [impact]=0.1 [slip_ramp]=0.6
+  [buoyancy]=1.2 [drag_low]=0.6 [drag_high]=0.6 [sinking_ship]=1.5
+  [sinking_ship_penalty]=1.5 [vessel]=1.0 [flotsam]=0.7 [dam_break]=0.5 [floating_box]=1.0
+)
+# Camera per scene (default iso).
+declare -A view=([slip_ramp]=iso [sinking_ship]=front [sinking_ship_penalty]=front
+  [drag_low]=front [drag_high]=front [buoyancy]=front)
+
+scenes=("$@")
+if ((${#scenes[@]} == 0)); then
+  for f in demos/scenes/*.json; do scenes+=("$(basename "$f" .json)"); done
+fi
+mkdir -p demos/gallery
+for name in "${scenes[@]}"; do
+  out=out/gallery/$name
+  "$wake" run "demos/scenes/$name.json" --out "$out" --quiet
+  rate=$(sed -n 's/.*"frame_rate": *\([0-9.]*\).*/\1/p' "demos/scenes/$name.json" | head -1)
+  t=${still[$name]:-0.5}
+  frame=$(awk -v t="$t" -v r="$rate" 'BEGIN { printf "%d", t * r + 0.5 }')
+  "$wake" render "$out" --frames "$frame" --width 640 --height 360 \
+    --view "${view[$name]:-iso}" --out "$out/still" --quiet
+  cp "$out/still/$(printf '%s_%06d.png' "$name" "$frame")" "demos/gallery/$name.png"
+  echo "[gallery] demos/gallery/$name.png (t = $t s)"
+done
+# Plots where a curve says more than a picture.
+for name in stone_skipping buoyancy sinking_ship sinking_ship_penalty; do
+  [[ -d out/gallery/$name ]] || continue
+  bash scripts/plot.sh "out/gallery/$name" >/dev/null
+  for p in heights density_ratio penetrating; do
+    [[ -f out/gallery/$name/plots/$p.png ]] && cp "out/gallery/$name/plots/$p.png" "demos/gallery/${name}_$p.png"
+  done
+done
+echo "[gallery] done"
