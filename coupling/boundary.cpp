@@ -261,6 +261,24 @@ void Boundaries::forEachContactCandidate(const SampleSet& set, const Vec3& p, F&
   });
 }
 
+template <class F>
+void Boundaries::forEachSampleNear(const Vec3& x, F&& f) const {
+  if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
+    forEachContactCandidate(static_, x, [&](std::uint32_t k, double d_sq) {
+      f(static_.body[k], nullptr, static_, k, x, d_sq);
+    });
+  }
+  if (!moving_reach_.contains(x)) return;
+  for (const MovingBody& m : moving_) {
+    if (!m.world_reach.contains(x)) continue;
+    const Body& b = bodies_[m.body];
+    const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
+    if (!m.samples.reach_box.contains(p)) continue;
+    forEachContactCandidate(
+        m.samples, p, [&](std::uint32_t k, double d_sq) { f(m.body, &b, m.samples, k, p, d_sq); });
+  }
+}
+
 std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxContacts>& out) const {
   std::size_t count = 0;
   // Keeps the nearest sample per body; ties go to the lower sample index, so the result
@@ -286,20 +304,8 @@ std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxCont
         out[far].body = body, out[far].sample = k, out[far].dist_sq = d_sq;
     }
   };
-  if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
-    forEachContactCandidate(static_, x,
-                            [&](std::uint32_t k, double d_sq) { offer(static_.body[k], k, d_sq); });
-  }
-  if (moving_reach_.contains(x)) {
-    for (const MovingBody& m : moving_) {
-      if (!m.world_reach.contains(x)) continue;
-      const Body& b = bodies_[m.body];
-      const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
-      if (!m.samples.reach_box.contains(p)) continue;
-      forEachContactCandidate(m.samples, p,
-                              [&](std::uint32_t k, double d_sq) { offer(m.body, k, d_sq); });
-    }
-  }
+  forEachSampleNear(x, [&](std::uint32_t body, const Body*, const SampleSet&, std::uint32_t k,
+                           const Vec3&, double d_sq) { offer(body, k, d_sq); });
   if (count == 0) return 0;
   std::sort(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(count),
             [](const Contact& a, const Contact& b) {
@@ -333,23 +339,15 @@ std::size_t Boundaries::penaltyTerms(const Vec3& x, double strength,
     const double q12 = q4 * q4 * q4;
     return strength * (q12 - q4) / d_sq * (p - xk);
   };
-  if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
-    forEachContactCandidate(static_, x, [&](std::uint32_t k, double d_sq) {
-      add(static_.body[k], static_.position[k], term(x, static_.position[k], d_sq));
-    });
-  }
-  if (moving_reach_.contains(x)) {
-    for (const MovingBody& m : moving_) {
-      if (!m.world_reach.contains(x)) continue;
-      const Body& b = bodies_[m.body];
-      const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
-      if (!m.samples.reach_box.contains(p)) continue;
-      forEachContactCandidate(m.samples, p, [&](std::uint32_t k, double d_sq) {
-        const Vec3& xk = m.samples.position[k];
-        add(m.body, b.rotation * xk + b.settings.pose.position, b.rotation * term(p, xk, d_sq));
-      });
-    }
-  }
+  forEachSampleNear(x, [&](std::uint32_t body, const Body* moving, const SampleSet& set,
+                           std::uint32_t k, const Vec3& p, double d_sq) {
+    const Vec3& xk = set.position[k];
+    if (!moving)
+      add(body, xk, term(p, xk, d_sq));
+    else
+      add(body, moving->rotation * xk + moving->settings.pose.position,
+          moving->rotation * term(p, xk, d_sq));
+  });
   return count;
 }
 

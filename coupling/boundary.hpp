@@ -155,6 +155,11 @@ class Boundaries {
   /// Calls f(k, dist_sq) for each sample k of `set` within contact reach of p (set space).
   template <class F>
   void forEachContactCandidate(const SampleSet& set, const Vec3& p, F&& f) const;
+  /// Calls f(body, moving, set, k, p, dist_sq) for each sample k within contact reach of
+  /// the world point x, over the static set and every moving body. p is x in the set's
+  /// space (world, or the moving body's frame); `moving` is that body (nullptr: static).
+  template <class F>
+  void forEachSampleNear(const Vec3& x, F&& f) const;
   /// Contact point and normal of a fluid centre x from the body's exact shape.
   void contactGeometry(const Vec3& x, Contact& ct) const;
   /// Boundary density sum sum_k V_k W(p - x_k) over `set` (p in the set's space).

@@ -292,17 +292,32 @@ struct Light {
   Vec3 half = (Vec3(-0.35, 0.75, -0.55).normalized() + Vec3(0, 0, -1)).normalized();
 };
 
+/// Where a disc of world radius `radius` at p lands on the image: its projected centre
+/// (sx, sy), depth z, pixel radius rp and pixel box [x0, x1] x [y0, y1].
+struct Footprint {
+  double sx = 0, sy = 0, z = 0, rp = 0;
+  int x0 = 0, x1 = -1, y0 = 0, y1 = -1;
+};
+
+/// False when the disc is behind the camera or off the image.
+bool footprint(const Image& im, const RenderCamera& cam, const Vec3& p, double radius,
+               Footprint& f) {
+  if (!cam.project(p, f.sx, f.sy, f.z) || f.z <= radius) return false;
+  f.rp = std::max(0.7, cam.focal * radius / f.z);
+  f.x0 = std::max(0, static_cast<int>(std::floor(f.sx - f.rp)));
+  f.x1 = std::min(im.width - 1, static_cast<int>(std::ceil(f.sx + f.rp)));
+  f.y0 = std::max(0, static_cast<int>(std::floor(f.sy - f.rp)));
+  f.y1 = std::min(im.height - 1, static_cast<int>(std::ceil(f.sy + f.rp)));
+  return f.x0 <= f.x1 && f.y0 <= f.y1;
+}
+
 /// A sphere impostor of world radius `radius` at p: per-pixel sphere normal and depth.
 void drawSphere(Image& im, const RenderCamera& cam, const Light& light, const Vec3& p,
                 double radius, const Rgb& color) {
-  double sx, sy, z;
-  if (!cam.project(p, sx, sy, z) || z <= radius) return;
-  const double rp = std::max(0.7, cam.focal * radius / z);
-  const int x0 = std::max(0, static_cast<int>(std::floor(sx - rp)));
-  const int x1 = std::min(im.width - 1, static_cast<int>(std::ceil(sx + rp)));
-  const int y0 = std::max(0, static_cast<int>(std::floor(sy - rp)));
-  const int y1 = std::min(im.height - 1, static_cast<int>(std::ceil(sy + rp)));
-  if (x0 > x1 || y0 > y1) return;
+  Footprint fp;
+  if (!footprint(im, cam, p, radius, fp)) return;
+  const double sx = fp.sx, sy = fp.sy, z = fp.z, rp = fp.rp;
+  const int x0 = fp.x0, x1 = fp.x1, y0 = fp.y0, y1 = fp.y1;
   const double inv = 1.0 / rp;
   for (int y = y0; y <= y1; ++y) {
     const double dy = (y + 0.5 - sy) * inv;
@@ -331,14 +346,10 @@ void drawSphere(Image& im, const RenderCamera& cam, const Light& light, const Ve
 /// ray-traced per pixel so that surfaces seen at a slant stay flat; shaded with n.
 void drawSplat(Image& im, const RenderCamera& cam, const Light& light, const Vec3& p, double radius,
                const Vec3& n, const Rgb& color) {
-  double sx, sy, z;
-  if (!cam.project(p, sx, sy, z) || z <= radius) return;
-  const double rp = std::max(0.7, cam.focal * radius / z);
-  const int x0 = std::max(0, static_cast<int>(std::floor(sx - rp)));
-  const int x1 = std::min(im.width - 1, static_cast<int>(std::ceil(sx + rp)));
-  const int y0 = std::max(0, static_cast<int>(std::floor(sy - rp)));
-  const int y1 = std::min(im.height - 1, static_cast<int>(std::ceil(sy + rp)));
-  if (x0 > x1 || y0 > y1) return;
+  Footprint fp;
+  if (!footprint(im, cam, p, radius, fp)) return;
+  const double sx = fp.sx, sy = fp.sy, z = fp.z;
+  const int x0 = fp.x0, x1 = fp.x1, y0 = fp.y0, y1 = fp.y1;
   // Camera coordinates (x right, y up, z forward): the splat's centre c and normal m.
   const Vec3 c(z * (sx - 0.5 * im.width) / cam.focal, -z * (sy - 0.5 * im.height) / cam.focal, z);
   Vec3 m(n.dot(cam.right), n.dot(cam.up), n.dot(cam.forward));
@@ -444,6 +455,7 @@ struct Plan {
   double body_radius = 0;  ///< radius of a drawn body sample, m
   double max_speed = 1;
   double near_depth = 0, far_depth = 1;  ///< depth ramp range
+  double section_depth = -1;  ///< fluid nearer than this depth is not drawn; < 0: all drawn
   RenderColor color = RenderColor::Speed;
   std::vector<BodyData> bodies;
   std::vector<Rgb> body_colors;
@@ -468,6 +480,7 @@ void renderFrame(const Plan& plan, const FrameData& frame, Image& im) {
   const double depth_scale = 1.0 / std::max(1e-12, plan.far_depth - plan.near_depth);
   for (std::size_t i = 0; i < frame.position.size(); ++i) {
     const Vec3& p = frame.position[i];
+    if (plan.section_depth > 0 && (p - cam.eye).dot(cam.forward) < plan.section_depth) continue;
     Rgb color;
     if (by_speed) {
       color = waterRamp(frame.velocity[i].norm() / plan.max_speed);
@@ -696,6 +709,9 @@ RenderResult renderRun(const RenderOptions& o) {
   box.max.array() += plan.radius;
   plan.camera = fitCamera(box, o.view, o.width, o.height);
   result.camera = plan.camera;
+  // A section through the middle of the scene, facing the camera: bodies under water show.
+  if (o.section)
+    plan.section_depth = (0.5 * (box.min + box.max) - plan.camera.eye).dot(plan.camera.forward);
   {
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
     for (int k = 0; k < 8; ++k) {

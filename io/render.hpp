@@ -10,8 +10,9 @@
 // (radius 0.75 x the sample spacing, so that they close the surface): dynamic bodies in
 // warm colours, kinematic ones
 // green, static ones grey. Static bodies that enclose the fluid (a tank) are cut open on the
-// camera's side, so the fluid inside stays visible. With `video`, ffmpeg (when on PATH)
-// joins the frames into DIR/<scene>.mp4.
+// camera's side, so the fluid inside stays visible. `section` leaves out the fluid in front
+// of the plane through the scene's centre that faces the camera, so submerged bodies show. With
+// `video`, ffmpeg (when on PATH) joins the frames into DIR/<scene>.mp4.
 #pragma once
 
 #include "sph/types.hpp"
@@ -40,6 +41,7 @@ struct RenderOptions {
   long every = 1;               ///< render every N-th frame of [first, last], >= 1
   double max_speed = 0;         ///< m/s at the top of the speed ramp; 0: automatic
   bool video = false;           ///< also DIR/<scene>.mp4 with ffmpeg when it is on PATH
+  bool section = false;         ///< draw only the fluid behind the scene's middle (a cut)
   std::ostream* log = nullptr;  ///< progress and the "video skipped" line; nullptr: none
 };
 

@@ -4,9 +4,10 @@
 # (wake render) into demos/gallery/<scene>.png and plots the time series of a few
 # (scripts/plot.sh) into demos/gallery/<scene>_<plot>.png.
 #
-#   bash scripts/gallery.sh [SCENE...]      (default: every scene; needs a build in build/)
+#   bash scripts/gallery.sh [--reuse] [SCENE...]   (default: every scene; needs build/)
 #
-# The runs go to out/gallery/<scene>/. Takes about 10 minutes on 2 cores.
+# The runs go to out/gallery/<scene>/ (--reuse: keep a finished run there and only draw).
+# Takes about 10 minutes on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 wake=./build/io/wake
@@ -18,23 +19,35 @@ declare -A still=(
   [buoyancy]=1.2 [drag_low]=0.6 [drag_high]=0.6 [sinking_ship]=1.5
   [sinking_ship_penalty]=1.5 [vessel]=1.0 [flotsam]=0.7 [dam_break]=0.5 [floating_box]=1.0
 )
-# Camera per scene (default iso).
-declare -A view=([slip_ramp]=iso [sinking_ship]=front [sinking_ship_penalty]=front
-  [drag_low]=front [drag_high]=front [buoyancy]=front)
+# Camera per scene (default --view iso); --section cuts the fluid open so that bodies
+# under water show.
+declare -A look=(
+  [buoyancy]="--view front --section" [drag_low]="--view front --section"
+  [drag_high]="--view front --section" [sinking_ship]="--view front --section"
+  [sinking_ship_penalty]="--view front --section" [vessel]="--view iso --section"
+  [floating_box]="--view iso --section"
+)
 
-scenes=("$@")
+reuse=0
+scenes=()
+for arg in "$@"; do
+  if [[ "$arg" == --reuse ]]; then reuse=1; else scenes+=("$arg"); fi
+done
 if ((${#scenes[@]} == 0)); then
   for f in demos/scenes/*.json; do scenes+=("$(basename "$f" .json)"); done
 fi
 mkdir -p demos/gallery
 for name in "${scenes[@]}"; do
   out=out/gallery/$name
-  "$wake" run "demos/scenes/$name.json" --out "$out" --quiet
+  if ((reuse == 0)) || [[ ! -f "$out/summary.json" ]]; then
+    "$wake" run "demos/scenes/$name.json" --out "$out" --quiet
+  fi
   rate=$(sed -n 's/.*"frame_rate": *\([0-9.]*\).*/\1/p' "demos/scenes/$name.json" | head -1)
   t=${still[$name]:-0.5}
   frame=$(awk -v t="$t" -v r="$rate" 'BEGIN { printf "%d", t * r + 0.5 }')
+  # shellcheck disable=SC2086 # the look is a list of options
   "$wake" render "$out" --frames "$frame" --width 640 --height 360 \
-    --view "${view[$name]:-iso}" --out "$out/still" --quiet
+    ${look[$name]:---view iso} --out "$out/still" --quiet
   cp "$out/still/$(printf '%s_%06d.png' "$name" "$frame")" "demos/gallery/$name.png"
   echo "[gallery] demos/gallery/$name.png (t = $t s)"
 done

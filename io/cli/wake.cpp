@@ -76,6 +76,8 @@ int main(int argc, char** argv) {
   render->add_option("--every", render_options.every, "Draw every N-th frame (default 1)");
   render->add_option("--max-speed", render_options.max_speed,
                      "Speed at the top of the colour ramp, m/s (default: 99th percentile)");
+  render->add_flag("--section", render_options.section,
+                   "Cut the fluid in half (the half facing the camera is not drawn)");
   render->add_flag("--video", render_options.video,
                    "Also write DIR/<scene>.mp4 with ffmpeg (skipped when ffmpeg is missing)");
   render->add_flag("--quiet,-q", render_quiet, "No progress output");
