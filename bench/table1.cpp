@@ -1,10 +1,11 @@
 // Table I of the paper for Wake's demo scenes: fluid and boundary particles, seconds for
 // the fluid part of a step and for a whole step, speed of sound, max density ratio.
 //
-//   wake_bench_table1 [--resolution F] [--end T] [--threads N] SCENE.json...
+//   wake_bench_table1 [--resolution F] [--end T | --steps S] [--threads N] SCENE.json...
 //
-// Each scene is run headless (no output files) from t = 0 to its end (or T) at the
-// scene's particle radius divided by F. "fluid" is the fluid's own work per step
+// Each scene is run headless (no output files) from t = 0 to its end (or T, or for S
+// steps only: timings at large resolutions) at the scene's particle radius divided by F.
+// The max density ratio is over the steps run. "fluid" is the fluid's own work per step
 // (neighbour search, density, pressure, forces, integration); "step" adds the boundary
 // (density share, velocity control, position correction) and the rigid bodies (Bullet).
 // Prints one Markdown table row per scene.
@@ -24,6 +25,7 @@
 int main(int argc, char** argv) {
   double resolution = 1.0, end = 0.0;
   int threads = 0;
+  long steps = 0;
   std::vector<std::string> scenes;
   for (int i = 1; i < argc; ++i) {
     auto value = [&](const char* name) -> std::string {
@@ -37,6 +39,8 @@ int main(int argc, char** argv) {
       resolution = std::stod(value("--resolution"));
     else if (!std::strcmp(argv[i], "--end"))
       end = std::stod(value("--end"));
+    else if (!std::strcmp(argv[i], "--steps"))
+      steps = std::stol(value("--steps"));
     else if (!std::strcmp(argv[i], "--threads"))
       threads = std::stoi(value("--threads"));
     else
@@ -59,15 +63,23 @@ int main(int argc, char** argv) {
       if (end > 0.0) wake::overrideEndTime(scene, end);
       wake::SceneWorld world(scene.sim, scene.bodies);
       world.coupled().start();
-      world.coupled().advanceTo(scene.end_time);
+      if (steps > 0) {
+        // Whole frames of the scene until S steps are done (CoupledWorld steps by frames).
+        const double frame = 1.0 / scene.frame_rate;
+        while (world.simulation().steps() < static_cast<std::uint64_t>(steps) &&
+               world.simulation().time() < scene.end_time)
+          world.coupled().advance(std::min(frame / 8, scene.end_time - world.simulation().time()));
+      } else {
+        world.coupled().advanceTo(scene.end_time);
+      }
       const wake::Simulation& sim = world.simulation();
       const wake::StepTimings& t = sim.timings();
-      const double steps = static_cast<double>(sim.steps());
+      const double taken = static_cast<double>(sim.steps());
       const double fluid = t.neighbors + t.density + t.forces + t.integration;
       std::printf("| %s | %zu | %zu | %llu | %.2f | %.2f | %.0f | %.3f |\n", scene.name.c_str(),
                   sim.fluidParticles(), sim.boundaryParticles(),
-                  static_cast<unsigned long long>(sim.steps()), 1e3 * fluid / steps,
-                  1e3 * t.total() / steps, sim.fluid().params().speed_of_sound,
+                  static_cast<unsigned long long>(sim.steps()), 1e3 * fluid / taken,
+                  1e3 * t.total() / taken, sim.fluid().params().speed_of_sound,
                   sim.maxDensityRatio());
       std::fflush(stdout);
     } catch (const std::exception& e) {
@@ -75,7 +87,9 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  std::printf("\n%d thread(s), resolution x%g%s\n", omp_get_max_threads(), resolution,
-              end > 0.0 ? (", end " + std::to_string(end) + " s").c_str() : "");
+  std::printf("\n%d thread(s), resolution x%g", omp_get_max_threads(), resolution);
+  if (steps > 0) std::printf(", %ld steps", steps);
+  if (end > 0.0) std::printf(", end %g s", end);
+  std::printf("\n");
   return 0;
 }

@@ -401,8 +401,8 @@ Aabb robustBounds(const std::vector<Vec3>& x) {
   for (int axis = 0; axis < 3; ++axis) {
     for (std::size_t i = 0; i < x.size(); ++i)
       v[i] = x[i][axis];
-    box.min[axis] = quantile(v, 0.002);
-    box.max[axis] = quantile(v, 0.998);
+    box.min[axis] = quantile(v, 0.01);  // splashes are not what the camera should frame
+    box.max[axis] = quantile(v, 0.99);
   }
   return box;
 }
@@ -642,7 +642,7 @@ RenderResult renderRun(const RenderOptions& o) {
 
   // Statistics over up to 48 frames spread over the whole run (not only the rendered
   // ones, so that every render of a run has the same camera and colour scale).
-  Aabb fluid_box;
+  Aabb fluid_box, start_box;  // over the sampled frames; at frame 0
   std::vector<double> speeds;
   double speed_scale = 0.0;
   {
@@ -651,7 +651,9 @@ RenderResult renderRun(const RenderOptions& o) {
     for (std::size_t s = 0; s < samples; ++s) {
       const std::size_t k = samples == 1 ? 0 : s * (frames - 1) / (samples - 1);
       file.readFrame(k, f, true, o.max_speed == 0);
-      fluid_box.extend(robustBounds(f.position));
+      const Aabb bounds = robustBounds(f.position);
+      fluid_box.extend(bounds);
+      if (k == 0) start_box = bounds;
       if (o.max_speed == 0 && !f.velocity.empty()) {
         speeds.resize(f.velocity.size());
         for (std::size_t i = 0; i < speeds.size(); ++i)
@@ -724,11 +726,12 @@ RenderResult renderRun(const RenderOptions& o) {
     plan.far_depth = hi;
   }
 
-  // Colours, and the cut-away of containers: a static body whose bounds hold the fluid's
-  // centre loses the samples on the camera's side of its own centre (along each sample's
-  // normal), e.g. a tank keeps its floor and back walls but not its front wall.
+  // Colours, and the cut-away of containers: a static body whose bounds hold the centre of
+  // the fluid at the start loses the samples on the camera's side of its own centre (along
+  // each sample's normal), e.g. a tank keeps its floor and back walls but not its front wall.
+  const Aabb& held = start_box.empty() ? fluid_box : start_box;
   const Vec3 fluid_centre =
-      fluid_box.empty() ? 0.5 * (box.min + box.max) : Vec3(0.5 * (fluid_box.min + fluid_box.max));
+      held.empty() ? 0.5 * (box.min + box.max) : Vec3(0.5 * (held.min + held.max));
   std::size_t counts[3] = {0, 0, 0};
   plan.visible.resize(plan.bodies.size());
   for (std::size_t b = 0; b < plan.bodies.size(); ++b) {

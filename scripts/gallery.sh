@@ -15,7 +15,7 @@ wake=./build/io/wake
 
 # The time (s) of the still for each scene: the moment that shows what the scene is about.
 declare -A still=(
-  [stone_skipping]=0.2 [stone_skipping_local]=0.2 [impact]=0.1 [slip_ramp]=0.6
+  [stone_skipping]=0.2 [stone_skipping_local]=0.2 [impact]=0.1 [slip_ramp]=0.3
   [buoyancy]=1.2 [drag_low]=0.6 [drag_high]=0.6 [sinking_ship]=1.5
   [sinking_ship_penalty]=1.5 [vessel]=1.0 [flotsam]=0.7 [dam_break]=0.5 [floating_box]=1.0
 )
@@ -25,7 +25,7 @@ declare -A look=(
   [buoyancy]="--view front --section" [drag_low]="--view front --section"
   [drag_high]="--view front --section" [sinking_ship]="--view front --section"
   [sinking_ship_penalty]="--view front --section" [vessel]="--view iso --section"
-  [floating_box]="--view iso --section"
+  [floating_box]="--view iso --section" [slip_ramp]="--view top" [impact]="--view front --section"
 )
 
 reuse=0
