@@ -64,11 +64,10 @@ int main(int argc, char** argv) {
       wake::SceneWorld world(scene.sim, scene.bodies);
       world.coupled().start();
       if (steps > 0) {
-        // Whole frames of the scene until S steps are done (CoupledWorld steps by frames).
-        const double frame = 1.0 / scene.frame_rate;
+        // Slices of 0.1 ms (a few steps each) until S steps are done.
         while (world.simulation().steps() < static_cast<std::uint64_t>(steps) &&
                world.simulation().time() < scene.end_time)
-          world.coupled().advance(std::min(frame / 8, scene.end_time - world.simulation().time()));
+          world.coupled().advance(std::min(1e-4, scene.end_time - world.simulation().time()));
       } else {
         world.coupled().advanceTo(scene.end_time);
       }
