@@ -347,4 +347,44 @@ TEST(WakeCli, EndOverrideAndQuiet) {
   EXPECT_EQ(s["frames"], 3);
 }
 
+TEST(WakeCli, ResolutionRefinesTheFluidAndSeriesHasARowPerFrame) {
+  const TempDir coarse, fine;
+  const std::string args = "run \"" + kScene + "\" --end 0.02 --quiet --out ";
+  ASSERT_EQ(runWake(args + "\"" + coarse.path.string() + "\"", coarse.path).status, 0);
+  const CliResult r = runWake(args + "\"" + fine.path.string() + "\" --resolution 2", fine.path);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json a = json::parse(readFile(coarse.path / "summary.json"));
+  const json b = json::parse(readFile(fine.path / "summary.json"));
+  EXPECT_EQ(b["particle_radius"].get<double>(), 0.5 * a["particle_radius"].get<double>());
+  EXPECT_EQ(b["fluid_particles"].get<long>(), 8 * a["fluid_particles"].get<long>());
+
+  // series.csv: a header naming the columns, then one row per frame at its time.
+  std::istringstream csv(readFile(fine.path / "series.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "time,max_density_ratio,penetrating,lost_particles,contacts");
+  std::vector<std::string> rows;
+  while (std::getline(csv, line))
+    rows.push_back(line);
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0].rfind("0,nan,0,0,", 0), 0u) << rows[0];
+  EXPECT_EQ(rows[2].rfind("0.02,", 0), 0u) << rows[2];
+  const double ratio = std::stod(rows[2].substr(rows[2].find(',') + 1));
+  EXPECT_GT(ratio, 0.9);
+  EXPECT_LT(ratio, 1.2);
+}
+
+TEST(WakeCli, BadResolutionExitsTwoNamingIt) {
+  const TempDir dir;
+  for (const char* value : {"0", "-1", "nan"}) {
+    const CliResult r = runWake("run \"" + kScene + "\" --out \"" + (dir.path / "out").string() +
+                                    "\" --resolution " + value,
+                                dir.path);
+    EXPECT_EQ(r.status, 2) << value << "\n" << r.err;
+    EXPECT_NE(r.err.find("--resolution"), std::string::npos) << r.err;
+    EXPECT_EQ(lineCount(r.err), 1u) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir.path / "out")) << "bad input created the output folder";
+}
+
 }  // namespace
