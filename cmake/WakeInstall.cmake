@@ -70,19 +70,18 @@ function(wake_install_package)
 
   # A static library's PRIVATE dependencies are part of its link interface
   # ($<LINK_ONLY:...>), so the package config must find them as well.
-  get_target_property(coupling_type wake_coupling TYPE)
-  if(coupling_type STREQUAL "STATIC_LIBRARY")
-    set(WAKE_PACKAGE_NEEDS_TINYOBJLOADER ON)
-  else()
-    set(WAKE_PACKAGE_NEEDS_TINYOBJLOADER OFF)
-  endif()
-  # Likewise stb (PNG output of wake::io's renderer), found again from these hints.
-  get_target_property(io_type wake_io TYPE)
-  if(io_type STREQUAL "STATIC_LIBRARY")
-    set(WAKE_PACKAGE_NEEDS_STB ON)
-  else()
-    set(WAKE_PACKAGE_NEEDS_STB OFF)
-  endif()
+  # tinyobjloader (wake::coupling's OBJ reader) and stb (PNG output of wake::io's
+  # renderer, found again from the hints below).
+  foreach(_need "wake_coupling;TINYOBJLOADER" "wake_io;STB")
+    list(GET _need 0 _target)
+    list(GET _need 1 _what)
+    get_target_property(_type ${_target} TYPE)
+    if(_type STREQUAL "STATIC_LIBRARY")
+      set(WAKE_PACKAGE_NEEDS_${_what} ON)
+    else()
+      set(WAKE_PACKAGE_NEEDS_${_what} OFF)
+    endif()
+  endforeach()
   get_filename_component(WAKE_PACKAGE_STB_LIBRARY_HINT "${WAKE_STB_LIBRARY}" DIRECTORY)
   if(WAKE_BULLET_DOUBLE)
     set(WAKE_PACKAGE_BULLET_DOUBLE ON)

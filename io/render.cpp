@@ -1,6 +1,8 @@
 // Software preview renderer: HDF5 in (C API), PNG out (stb_image_write). See render.hpp.
 #include "io/render.hpp"
 
+#include "io/hdf5_handle.hpp"
+
 #include "io/scene.hpp"
 
 #include <hdf5.h>
@@ -34,39 +36,8 @@ static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 arrays are read as N x 3
 // ---------------------------------------------------------------------------------------
 // Reading the run (HDF5 is not thread-safe: every read happens on one thread).
 
-/// Owns one HDF5 identifier.
-class Id {
- public:
-  using Closer = herr_t (*)(hid_t);
-  Id(hid_t id, Closer close) : id_(id), close_(close) {}
-  Id(const Id&) = delete;
-  Id& operator=(const Id&) = delete;
-  ~Id() {
-    if (id_ >= 0) close_(id_);
-  }
-  hid_t get() const { return id_; }
-  bool valid() const { return id_ >= 0; }
-
- private:
-  hid_t id_;
-  Closer close_;
-};
-
-/// Silences HDF5's error stack printing while in scope.
-class Quiet {
- public:
-  Quiet() {
-    H5Eget_auto2(H5E_DEFAULT, &func_, &data_);
-    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  }
-  ~Quiet() { H5Eset_auto2(H5E_DEFAULT, func_, data_); }
-  Quiet(const Quiet&) = delete;
-  Quiet& operator=(const Quiet&) = delete;
-
- private:
-  H5E_auto2_t func_ = nullptr;
-  void* data_ = nullptr;
-};
+using hdf5::Handle;
+using hdf5::QuietHdf5Errors;
 
 struct BodyData {
   std::string name, kind;
@@ -97,7 +68,7 @@ class RunFile {
 
   double rootDouble(const char* name, double fallback) const {
     if (H5Aexists(file_.get(), name) <= 0) return fallback;
-    const Id attr(H5Aopen(file_.get(), name, H5P_DEFAULT), H5Aclose);
+    const Handle attr(H5Aopen(file_.get(), name, H5P_DEFAULT), H5Aclose);
     double value = fallback;
     if (!attr.valid() || H5Aread(attr.get(), H5T_NATIVE_DOUBLE, &value) < 0)
       fail("read attribute " + std::string(name));
@@ -106,9 +77,9 @@ class RunFile {
 
   static std::string stringAttribute(hid_t object, const char* name) {
     if (H5Aexists(object, name) <= 0) return "";
-    const Id attr(H5Aopen(object, name, H5P_DEFAULT), H5Aclose);
+    const Handle attr(H5Aopen(object, name, H5P_DEFAULT), H5Aclose);
     if (!attr.valid()) return "";
-    const Id type(H5Aget_type(attr.get()), H5Tclose);
+    const Handle type(H5Aget_type(attr.get()), H5Tclose);
     if (!type.valid() || H5Tget_class(type.get()) != H5T_STRING) return "";
     if (H5Tis_variable_str(type.get()) > 0) {
       char* text = nullptr;
@@ -125,7 +96,7 @@ class RunFile {
 
   std::size_t frameCount() const {
     if (H5Lexists(file_.get(), "frames", H5P_DEFAULT) <= 0) fail("find the group /frames");
-    const Id group(H5Gopen2(file_.get(), "frames", H5P_DEFAULT), H5Gclose);
+    const Handle group(H5Gopen2(file_.get(), "frames", H5P_DEFAULT), H5Gclose);
     H5G_info_t info;
     if (!group.valid() || H5Gget_info(group.get(), &info) < 0) fail("read the group /frames");
     return static_cast<std::size_t>(info.nlinks);
@@ -134,7 +105,7 @@ class RunFile {
   void readFrame(std::size_t k, FrameData& out, bool positions, bool velocities) const {
     char name[48];
     std::snprintf(name, sizeof(name), "frames/%06zu", k);
-    const Id group(H5Gopen2(file_.get(), name, H5P_DEFAULT), H5Gclose);
+    const Handle group(H5Gopen2(file_.get(), name, H5P_DEFAULT), H5Gclose);
     if (!group.valid()) fail(std::string("open /") + name);
     out.index = k;
     if (positions) readRows(group.get(), "position", 3, name, out.position);
@@ -144,7 +115,7 @@ class RunFile {
   std::vector<BodyData> readBodies() const {
     std::vector<BodyData> out;
     if (H5Lexists(file_.get(), "bodies", H5P_DEFAULT) <= 0) return out;
-    const Id bodies(H5Gopen2(file_.get(), "bodies", H5P_DEFAULT), H5Gclose);
+    const Handle bodies(H5Gopen2(file_.get(), "bodies", H5P_DEFAULT), H5Gclose);
     H5G_info_t info;
     if (!bodies.valid() || H5Gget_info(bodies.get(), &info) < 0) fail("read the group /bodies");
     for (hsize_t i = 0; i < info.nlinks; ++i) {
@@ -155,7 +126,7 @@ class RunFile {
       H5Lget_name_by_idx(bodies.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, &body_name[0],
                          body_name.size(), H5P_DEFAULT);
       body_name.resize(static_cast<std::size_t>(size));
-      const Id group(H5Gopen2(bodies.get(), body_name.c_str(), H5P_DEFAULT), H5Gclose);
+      const Handle group(H5Gopen2(bodies.get(), body_name.c_str(), H5P_DEFAULT), H5Gclose);
       if (!group.valid()) fail("open /bodies/" + body_name);
       BodyData b;
       b.name = body_name;
@@ -188,9 +159,9 @@ class RunFile {
   void readFlat(hid_t group, const char* name, hsize_t cols, const std::string& where,
                 std::vector<double>& out) const {
     const std::string full = "/" + where + "/" + name;
-    const Id set(H5Dopen2(group, name, H5P_DEFAULT), H5Dclose);
+    const Handle set(H5Dopen2(group, name, H5P_DEFAULT), H5Dclose);
     if (!set.valid()) fail("open dataset " + full);
-    const Id space(H5Dget_space(set.get()), H5Sclose);
+    const Handle space(H5Dget_space(set.get()), H5Sclose);
     hsize_t dims[2] = {0, 0};
     const int rank = space.valid() ? H5Sget_simple_extent_ndims(space.get()) : -1;
     if (rank < 1 || rank > 2) fail("read dataset " + full + " (unexpected shape)");
@@ -213,7 +184,7 @@ class RunFile {
   }
 
   std::string path_;
-  Id file_;
+  Handle file_;
 };
 
 // ---------------------------------------------------------------------------------------
@@ -606,7 +577,7 @@ void parseFrameRange(const std::string& value, long& first, long& last, const st
 
 RenderResult renderRun(const RenderOptions& o) {
   const Clock::time_point start = Clock::now();
-  const Quiet quiet;
+  const QuietHdf5Errors quiet;
   if (o.width < 16 || o.width > 8192)
     throw SceneError("--width: must be in [16, 8192] pixels (got " + std::to_string(o.width) + ")");
   if (o.height < 16 || o.height > 8192)

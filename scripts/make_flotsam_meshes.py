@@ -23,6 +23,18 @@ def write(name, verts, faces, comment):
             f.write("f %d %d %d\n" % (t[0] + 1, t[1] + 1, t[2] + 1))
 
 
+def ring_strips(rings, n, downwards):
+    """Triangles joining rings 0..rings of n vertices each (ring k at k * n), facing out;
+    `downwards`: the rings are stacked from the top down."""
+    faces = []
+    for k in range(rings):
+        for i in range(n):
+            a, b = k * n + i, k * n + (i + 1) % n
+            c, d = b + n, a + n
+            faces += [(a, b, c), (a, c, d)] if downwards else [(a, c, b), (a, d, c)]
+    return faces
+
+
 def torus(R, r, nu, nv):
     verts, faces = [], []
     for i in range(nu):
@@ -51,11 +63,7 @@ def barrel(radius, half_height, bulge, n, rings):
             verts.append((rr * math.cos(a), y, rr * math.sin(a)))
     bottom, top = len(verts), len(verts) + 1
     verts += [(0, -half_height, 0), (0, half_height, 0)]
-    for k in range(rings):
-        for i in range(n):
-            a, b = k * n + i, k * n + (i + 1) % n
-            c, d = b + n, a + n
-            faces += [(a, c, b), (a, d, c)]
+    faces += ring_strips(rings, n, downwards=False)
     for i in range(n):
         faces.append((bottom, i, (i + 1) % n))
         faces.append((top, rings * n + (i + 1) % n, rings * n + i))
@@ -113,11 +121,7 @@ def boat(length, beam, depth, n):
             verts.append((x, y, z))
     deck = len(verts)
     verts.append((0, 0, 0))
-    for k in range(rings):
-        for i in range(n):
-            a, b = k * n + i, k * n + (i + 1) % n
-            c, d = b + n, a + n
-            faces += [(a, b, c), (a, c, d)]
+    faces += ring_strips(rings, n, downwards=True)
     for i in range(n):
         faces.append((deck, (i + 1) % n, i))
     # The keel ring has zero width: close it with a fan of its own.
