@@ -22,18 +22,6 @@ double particleRadius(const SceneOutput& out) {
   return out.scene().sim.fluid.particle_radius;
 }
 
-/// Fluid centres of frame k inside the box [lo, hi] of the body's own frame.
-std::size_t countInBodyBox(const SceneOutput& out, const std::string& body, std::size_t k,
-                           const Frame& f, const Vec3& lo, const Vec3& hi) {
-  const Pose& pose = out.body(body).pose[k];
-  std::size_t count = 0;
-  for (const Vec3& x : f.position) {
-    const Vec3 p = pose.toBody(x);
-    count += (p.array() > lo.array()).all() && (p.array() < hi.array()).all();
-  }
-  return count;
-}
-
 // --- Stone skipping (Figs. 1, 11) -------------------------------------------------------
 
 void checkStoneSkips(const std::string& scene) {
@@ -191,17 +179,56 @@ TEST(SinkingShip, FillsAndSinksWithoutLeaks) {
   const SceneOutput out("sinking_ship");
   const test::BodyTrack& ship = out.body("ship");
   const std::size_t last = out.frames() - 1;
-  // The hull's cavity in the ship's frame (walls 2 cm thick, centre of mass 4.5 cm above
-  // the bottom plates' centre): inner faces at |x| = 0.16, |z| = 0.08, floor y = -0.0346.
-  const Vec3 c = Vec3(0.4, 0.31, 0.14) - ship.pose[0].position;  // scene origin in COM frame
-  const Vec3 lo = c + Vec3(-0.16, -0.04, -0.08), hi = c + Vec3(0.16, 0.06, 0.08);
-  const std::size_t inside = countInBodyBox(out, "ship", last, out.frame(last), lo, hi);
+  // The hull in the frame of its scene position (its centre of mass lies 1.5 cm lower):
+  // end walls at |x| in [0.16, 0.18], side walls at |z| in [0.08, 0.10], rim y = 0.06,
+  // bottom plates y in [-0.06, -0.04] for |x| in [0.06, 0.18]; the slot is |x| < 0.06.
+  const Vec3 c = Vec3(0.4, 0.31, 0.14) - ship.pose[0].position;
+  auto local = [&](std::size_t k, const Vec3& x) { return Vec3(ship.pose[k].toBody(x) - c); };
+  auto inHull = [](const Vec3& p) {
+    return std::abs(p.x()) < 0.16 && std::abs(p.z()) < 0.08 && p.y() > -0.04 && p.y() < 0.06;
+  };
+  // Every particle that enters the hull between two frames came in through the slot or
+  // over the rim: before, it was below the slot (|x| < 0.06 + 3 cm, the most a particle
+  // moves in a frame here) or above the rim, never beside a wall or under a plate.
+  std::size_t through_slot = 0, over_rim = 0, through_walls = 0;
+  Frame before = out.frame(0);
+  std::map<std::uint32_t, Vec3> was;  // id -> position at the previous frame (ship frame)
+  for (std::size_t i = 0; i < before.id.size(); ++i)
+    was[before.id[i]] = local(0, before.position[i]);
+  for (std::size_t k = 1; k <= last; ++k) {
+    const Frame f = out.frame(k);
+    for (std::size_t i = 0; i < f.id.size(); ++i) {
+      const Vec3 p = local(k, f.position[i]);
+      Vec3& q = was[f.id[i]];
+      if (inHull(p) && !inHull(q)) {
+        if (q.y() >= 0.06) {
+          ++over_rim;
+        } else if (std::abs(q.x()) < 0.09 && std::abs(q.z()) < 0.08) {
+          ++through_slot;
+        } else {
+          ++through_walls;
+          ADD_FAILURE() << "frame " << k << ": particle " << f.id[i] << " entered the hull "
+                        << "through a wall, from (" << q.transpose() << ") to (" << p.transpose()
+                        << ")";
+        }
+      }
+      q = p;
+    }
+  }
+  const Frame end = out.frame(last);
+  std::size_t inside = 0;
+  for (const Vec3& x : end.position)
+    inside += inHull(local(last, x));
   const double sunk = ship.pose[0].position.y() - ship.pose[last].position.y();
   std::printf(
-      "[ sinking ship ] sank %.3f m; %zu fluid particles inside the hull; "
+      "[ sinking ship ] sank %.3f m; %zu fluid particles inside the hull at the end; "
+      "entries: %zu through the slot, %zu over the rim, %zu through the walls; "
       "max_penetrating %d\n",
-      sunk, inside, out.summary()["max_penetrating"].get<int>());
+      sunk, inside, through_slot, over_rim, through_walls,
+      out.summary()["max_penetrating"].get<int>());
   EXPECT_EQ(out.summary()["max_penetrating"].get<int>(), 0);
+  EXPECT_EQ(through_walls, 0u);
+  EXPECT_GT(through_slot, 200u);
   EXPECT_GT(inside, 200u);
   EXPECT_GT(sunk, 0.1);
 }
