@@ -261,7 +261,7 @@ double Simulation::step(double t_limit) {
     timings_.boundary += t_penalty;
   }
 
-  // Predict: v* = v + dt a, x* = x + dt v* (all forces but the boundary's).
+  // Predict: v* = v + dt a, x* = x + dt v* (all forces but direct forcing's).
   t0 = Clock::now();
   const double dt = chooseDt(t_limit);
   const std::int64_t n = static_cast<std::int64_t>(st.size());

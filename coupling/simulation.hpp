@@ -1,7 +1,9 @@
 // A fluid with rigid bodies, stepped by direct forcing (DESIGN.md §4-5, Algorithm 1).
 // The coupling owns the step order. Rigid bodies enter through the RigidBodies interface
 // (coupling/rigid_body.hpp): Bullet in bullet_bridge/, or SimpleRigidBodies (gravity, no
-// body-body contact) when none is given.
+// body-body contact) when none is given. With CouplingMethod::Penalty (the paper's baseline,
+// coupling/penalty.hpp) the boundary force joins the fluid's forces instead, and there is
+// no velocity control and no position correction.
 #pragma once
 
 #include "coupling/boundary.hpp"
