@@ -2,6 +2,8 @@
 // its HDF5 output is read back with the HDF5 C API and checked against the layout of
 // DESIGN.md §7, the summary against its contract fields; bad input must fail with one
 // error line and leave the earlier output byte for byte as it was.
+#include "io/io_test_support.hpp"
+
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <sys/wait.h>
@@ -23,16 +25,12 @@ namespace {
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
+using wake::test::datasetDims;
+using wake::test::readDataset;
+using wake::test::readFile;
 
 const std::string kScene = std::string(WAKE_TEST_DATA_DIR) + "/scenes/small_dambreak.json";
 constexpr std::size_t kFrames = 6;  // round(end 0.05 s * 100 /s) + 1
-
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 /// A fresh folder under the system's temporary folder, removed at the end.
 struct TempDir {
@@ -75,31 +73,6 @@ std::size_t lineCount(const std::string& s) {
 }
 
 // --- HDF5 reading (C API) ----------------------------------------------------------------
-
-std::vector<hsize_t> datasetDims(hid_t location, const std::string& name) {
-  const hid_t set = H5Dopen2(location, name.c_str(), H5P_DEFAULT);
-  if (set < 0) return {};
-  const hid_t space = H5Dget_space(set);
-  std::vector<hsize_t> dims(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space)));
-  H5Sget_simple_extent_dims(space, dims.data(), nullptr);
-  H5Sclose(space);
-  H5Dclose(set);
-  return dims;
-}
-
-template <class T>
-std::vector<T> readDataset(hid_t location, const std::string& name, hid_t memory_type) {
-  std::size_t n = 1;
-  for (const hsize_t d : datasetDims(location, name))
-    n *= d;
-  std::vector<T> values(n);
-  const hid_t set = H5Dopen2(location, name.c_str(), H5P_DEFAULT);
-  if (n > 0) {
-    EXPECT_GE(H5Dread(set, memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0);
-  }
-  H5Dclose(set);
-  return values;
-}
 
 double readDoubleAttribute(hid_t object, const char* name) {
   double value = NAN;

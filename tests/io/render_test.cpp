@@ -5,6 +5,8 @@
 #include "bullet_bridge/scene_world.hpp"
 #include "io/run.hpp"
 
+#include "io/io_test_support.hpp"
+
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <stb/stb_image.h>
@@ -24,6 +26,12 @@ namespace wake {
 namespace {
 
 namespace fs = std::filesystem;
+using test::datasetDims;
+using test::readFile;
+
+std::vector<double> readDoubles(hid_t file, const std::string& name) {
+  return test::readDataset<double>(file, name, H5T_NATIVE_DOUBLE);
+}
 
 const char* const kScene = R"({
   "name": "render_tank",
@@ -40,13 +48,6 @@ const char* const kScene = R"({
       "shape": { "type": "box", "half_extents": [0.025, 0.02, 0.025] } }
   ]
 })";
-
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 /// The tiny scene, run once per test program into a temporary folder.
 class RenderTest : public ::testing::Test {
@@ -89,28 +90,6 @@ class RenderTest : public ::testing::Test {
 };
 fs::path* RenderTest::root_ = nullptr;
 
-std::vector<hsize_t> dims(hid_t file, const std::string& name) {
-  const hid_t set = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
-  if (set < 0) return {};
-  const hid_t space = H5Dget_space(set);
-  std::vector<hsize_t> d(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space)));
-  H5Sget_simple_extent_dims(space, d.data(), nullptr);
-  H5Sclose(space);
-  H5Dclose(set);
-  return d;
-}
-
-std::vector<double> readDoubles(hid_t file, const std::string& name) {
-  std::size_t n = 1;
-  for (const hsize_t d : dims(file, name))
-    n *= d;
-  std::vector<double> v(n);
-  const hid_t set = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
-  if (set >= 0 && n > 0) H5Dread(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
-  if (set >= 0) H5Dclose(set);
-  return v;
-}
-
 std::string readStringAttribute(hid_t file, const std::string& object, const char* name) {
   const hid_t attr = H5Aopen_by_name(file, object.c_str(), name, H5P_DEFAULT, H5P_DEFAULT);
   if (attr < 0) return "<missing>";
@@ -151,8 +130,8 @@ TEST_F(RenderTest, BodySurfacesAreWrittenInTheBodyFrame) {
     const std::string group = "/bodies/" + boundaries.body(b).name;
     const std::size_t m = boundaries.bodySampleCount(b);
     EXPECT_GT(m, 0u);
-    EXPECT_EQ(dims(file, group + "/surface_points"), (std::vector<hsize_t>{m, 3})) << group;
-    EXPECT_EQ(dims(file, group + "/surface_normals"), (std::vector<hsize_t>{m, 3})) << group;
+    EXPECT_EQ(datasetDims(file, group + "/surface_points"), (std::vector<hsize_t>{m, 3})) << group;
+    EXPECT_EQ(datasetDims(file, group + "/surface_normals"), (std::vector<hsize_t>{m, 3})) << group;
     const std::vector<double> n = readDoubles(file, group + "/surface_normals");
     for (std::size_t k = 0; k + 2 < n.size(); k += 3)
       ASSERT_NEAR(std::sqrt(n[k] * n[k] + n[k + 1] * n[k + 1] + n[k + 2] * n[k + 2]), 1.0, 1e-9);

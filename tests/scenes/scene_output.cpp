@@ -1,5 +1,7 @@
 #include "scene_output.hpp"
 
+#include "io/io_test_support.hpp"
+
 #include <gtest/gtest.h>
 #include <hdf5.h>
 
@@ -11,19 +13,6 @@
 namespace wake::test {
 
 namespace {
-
-template <class T>
-std::vector<T> readDataset(hid_t group, const char* name, hid_t type) {
-  const hid_t set = H5Dopen2(group, name, H5P_DEFAULT);
-  if (set < 0) throw std::runtime_error(std::string("no dataset ") + name);
-  const hid_t space = H5Dget_space(set);
-  const hssize_t n = H5Sget_simple_extent_npoints(space);
-  std::vector<T> out(static_cast<std::size_t>(n));
-  if (n > 0) H5Dread(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data());
-  H5Sclose(space);
-  H5Dclose(set);
-  return out;
-}
 
 std::vector<Vec3> toVec3(const std::vector<double>& flat) {
   std::vector<Vec3> out(flat.size() / 3);
@@ -59,6 +48,10 @@ SceneOutput::SceneOutput(const std::string& name)
     const std::vector<Vec3> x = toVec3(readDataset<double>(g, "position", H5T_NATIVE_DOUBLE));
     const std::vector<double> q = readDataset<double>(g, "orientation", H5T_NATIVE_DOUBLE);
     track.velocity = toVec3(readDataset<double>(g, "linear_velocity", H5T_NATIVE_DOUBLE));
+    if (x.empty() || q.size() != 4 * x.size() || track.velocity.size() != x.size() ||
+        track.time.size() != x.size())
+      throw std::runtime_error(h5Path(dir_, scene_.name) + ": /bodies/" + spec.name +
+                               " is missing or its series differ in length");
     for (std::size_t k = 0; k < x.size(); ++k) {
       Pose pose;
       pose.position = x[k];

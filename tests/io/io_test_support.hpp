@@ -1,0 +1,52 @@
+// Small readers shared by the tests that look at Wake's output files (tests/io/,
+// tests/scenes/): whole files, and HDF5 datasets through the C API.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <hdf5.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace wake::test {
+
+inline std::string readFile(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// Dimensions of a dataset; empty when there is none of that name.
+inline std::vector<hsize_t> datasetDims(hid_t location, const std::string& name) {
+  const hid_t set = H5Dopen2(location, name.c_str(), H5P_DEFAULT);
+  if (set < 0) return {};
+  const hid_t space = H5Dget_space(set);
+  std::vector<hsize_t> dims(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space)));
+  H5Sget_simple_extent_dims(space, dims.data(), nullptr);
+  H5Sclose(space);
+  H5Dclose(set);
+  return dims;
+}
+
+/// All values of a dataset, flattened; empty when there is none of that name.
+template <class T>
+std::vector<T> readDataset(hid_t location, const std::string& name, hid_t memory_type) {
+  const std::vector<hsize_t> dims = datasetDims(location, name);
+  if (dims.empty()) return {};
+  std::size_t n = 1;
+  for (const hsize_t d : dims)
+    n *= d;
+  std::vector<T> values(n);
+  const hid_t set = H5Dopen2(location, name.c_str(), H5P_DEFAULT);
+  if (n > 0) {
+    EXPECT_GE(H5Dread(set, memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0) << name;
+  }
+  H5Dclose(set);
+  return values;
+}
+
+}  // namespace wake::test
