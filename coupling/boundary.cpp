@@ -50,6 +50,8 @@ std::size_t Boundaries::addBody(const BodySettings& settings) {
     b.extent = std::max(b.extent, p.norm() + radius_);
   b.rotation = settings.pose.orientation.toRotationMatrix();
   updateWorldBounds(b);
+  shear_factor_.push_back(1.0 - settings.slip);
+  any_shear_ = any_shear_ || settings.slip < 1.0;
   bodies_.push_back(std::move(b));
   return bodies_.size() - 1;
 }
@@ -57,6 +59,7 @@ std::size_t Boundaries::addBody(const BodySettings& settings) {
 void Boundaries::updateWorldBounds(Body& b) {
   const Aabb clip = transformBounds(domain_, b.settings.pose, false);
   b.world_bounds = transformBounds(b.settings.shape->bounds(clip), b.settings.pose, true);
+  b.contact_bounds = grown(b.world_bounds, radius_);
 }
 
 void Boundaries::buildSet(SampleSet& set, const Aabb& box, const std::vector<Vec3>& pos,
@@ -74,7 +77,10 @@ void Boundaries::buildSet(SampleSet& set, const Aabb& box, const std::vector<Vec
     return std::max(1, static_cast<int>(std::ceil(distance / set.grid.cellSize() - 1e-12)));
   };
   set.density_reach = cellsToCover(support);
-  set.contact_reach = cellsToCover(2.0 * radius_);
+  set.sample_reach = cellsToCover(2.0 * radius_);
+  // A centre within r of the surface is within r + r_b of a sample's centre along the
+  // normal and at most about a spacing beside it (between samples): 4 r covers it.
+  set.contact_reach = cellsToCover(4.0 * radius_);
   set.reach_box = grid_box;
 
   std::vector<std::uint32_t> order;
@@ -144,6 +150,8 @@ void Boundaries::finalize() {
     b.local.clear();
   }
   if (!pos.empty()) buildSet(static_, domain_, pos, nrm, owner, /*flags=*/true);
+  for (std::size_t bi = 0; bi < bodies_.size(); ++bi)
+    if (!bodies_[bi].settings.moves()) static_bodies_.push_back(static_cast<std::uint32_t>(bi));
   // Moving bodies: one body-space set each.
   for (std::size_t bi = 0; bi < bodies_.size(); ++bi) {
     Body& b = bodies_[bi];
@@ -155,7 +163,7 @@ void Boundaries::finalize() {
       box.extend(p);
     if (!box.empty()) {
       buildSet(m.samples, box, b.local.position, b.local.normal,
-               std::vector<std::uint32_t>(b.local.size(), m.body), /*flags=*/false);
+               std::vector<std::uint32_t>(b.local.size(), m.body), /*flags=*/true);
     }
     b.local.clear();
     b.moving = static_cast<std::int32_t>(moving_.size());
@@ -227,33 +235,121 @@ double Boundaries::densitySum(const SampleSet& set, const Vec3& p) const {
 }
 
 void Boundaries::addDensity(const Fluid& fluid, std::vector<double>& density) const {
-  const std::vector<Vec3>& x = fluid.state().position;
-  const double rho0 = fluid_.rest_density;
-  const bool has_static = !static_.position.empty();
-  const std::int64_t n = static_cast<std::int64_t>(x.size());
-#pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < n; ++i) {
-    const Vec3 xi = x[i];
-    double sum = 0.0;
-    if (has_static && (static_.near[static_.grid.cellIndex(xi)] & kNearDensity))
-      sum += densitySum(static_, xi);
-    if (moving_reach_.contains(xi)) {
-      for (const MovingBody& m : moving_) {
-        if (!m.world_reach.contains(xi)) continue;
-        const Body& b = bodies_[m.body];
-        const Vec3 p = b.rotation.transpose() * (xi - b.settings.pose.position);
-        if (m.samples.reach_box.contains(p)) sum += densitySum(m.samples, p);
-      }
+  wallPass(fluid, density, nullptr, nullptr);
+}
+
+void Boundaries::addWallTerms(const Fluid& fluid, std::vector<double>& density,
+                              std::vector<Vec3>& shear, std::vector<Wrench>& reaction) const {
+  wallPass(fluid, density, &shear, &reaction);
+}
+
+double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u,
+                            const Vec3& omega, Vec3& shear, Vec3* moment) const {
+  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
+  const double h = kernel_.smoothingLength();
+  const double eps_sq = 0.01 * h * h;
+  const double rb = radius_;
+  const double two_nu = 2.0 * nu;
+  double sum = 0.0;
+  set.grid.forEachRangeWithin(p, set.density_reach, [&](std::uint32_t lo, std::uint32_t hi) {
+    for (std::uint32_t k = lo; k < hi; ++k) {
+      const Vec3 d = p - set.position[k];
+      const double d_sq = d.squaredNorm();
+      if (d_sq >= support_sq) continue;
+      const double r = std::sqrt(d_sq);
+      sum += set.volume[k] * kernel_.value(r);
+      const double factor = shear_factor_[set.body[k]];
+      if (factor <= 0.0) continue;
+      // Morris's ghost velocity: the sample lies rb behind the surface, the particle
+      // `beyond` in front of it; 1 + rb / beyond, at most 2 (a particle at or inside its
+      // radius).
+      const double beyond = d.dot(set.normal[k]) - rb;
+      const double beta = beyond > rb ? 1.0 + rb / beyond : 2.0;
+      const double w = -factor * two_nu * set.volume[k] * beta * d_sq *
+                       kernel_.derivativeOverR(r) / (d_sq + eps_sq);
+      const Vec3 rel = u - omega.cross(set.position[k]);
+      shear += w * rel;
+      if (moment) *moment += w * set.position[k].cross(rel);
     }
-    density[i] += rho0 * sum;
+  });
+  return sum;
+}
+
+void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
+                          std::vector<Vec3>* shear, std::vector<Wrench>* reaction) const {
+  const FluidState& st = fluid.state();
+  const std::vector<Vec3>& x = st.position;
+  const double rho0 = fluid_.rest_density;
+  const double mass = fluid.particleMass();
+  const bool has_static = !static_.position.empty();
+  const std::size_t n = x.size(), nb = bodies_.size();
+  const bool with_shear = shear && any_shear_;
+  if (shear) shear->assign(n, Vec3::Zero());
+  if (reaction) reaction->assign(nb, Wrench{});
+  bool two_way = false;
+  for (const MovingBody& m : moving_)
+    two_way = two_way || (with_shear && bodies_[m.body].settings.twoWay());
+  const std::size_t chunks = (n + kChunk - 1) / kChunk;
+  if (two_way) chunk_reaction_.assign(chunks * nb, Wrench{});
+  const Vec3 zero = Vec3::Zero();
+#pragma omp parallel for schedule(static)
+  for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
+    const std::size_t end = std::min(n, (c + 1) * kChunk);
+    for (std::size_t i = c * kChunk; i < end; ++i) {
+      const Vec3 xi = x[i], vi = st.velocity[i];
+      const double nu = with_shear ? st.kinematic_viscosity[i] : 0.0;
+      double sum = 0.0;
+      Vec3 a = Vec3::Zero();
+      if (has_static && (static_.near[static_.grid.cellIndex(xi)] & kNearDensity)) {
+        if (nu > 0.0) {
+          Vec3 s = Vec3::Zero();
+          sum += wallSums(static_, xi, nu, vi, zero, s, nullptr);
+          a -= s;
+        } else {
+          sum += densitySum(static_, xi);
+        }
+      }
+      if (moving_reach_.contains(xi)) {
+        for (const MovingBody& m : moving_) {
+          if (!m.world_reach.contains(xi)) continue;
+          const Body& b = bodies_[m.body];
+          const Mat3 rt = b.rotation.transpose();
+          const Vec3 p = rt * (xi - b.settings.pose.position);
+          if (!m.samples.reach_box.contains(p)) continue;
+          if (!(nu > 0.0)) {
+            sum += densitySum(m.samples, p);
+            continue;
+          }
+          const bool react = b.settings.twoWay();
+          Vec3 s = Vec3::Zero(), moment = Vec3::Zero();
+          sum += wallSums(m.samples, p, nu, rt * (vi - b.settings.linear_velocity),
+                          rt * b.settings.angular_velocity, s, react ? &moment : nullptr);
+          const Vec3 force = b.rotation * s;  // per unit fluid mass, on the body
+          a -= force;
+          if (react) {
+            Wrench& w = chunk_reaction_[c * nb + m.body];
+            w.force += mass * force;
+            w.torque += mass * (b.rotation * moment);
+          }
+        }
+      }
+      density[i] += rho0 * sum;
+      if (with_shear) (*shear)[i] = a;
+    }
   }
+  if (!two_way) return;
+  for (std::size_t c = 0; c < chunks; ++c)
+    for (std::size_t b = 0; b < nb; ++b) {
+      (*reaction)[b].force += chunk_reaction_[c * nb + b].force;
+      (*reaction)[b].torque += chunk_reaction_[c * nb + b].torque;
+    }
 }
 
 template <class F>
 void Boundaries::forEachContactCandidate(const SampleSet& set, const Vec3& p, F&& f) const {
   const double reach = radius_ + radius_;  // r_f + r_b
   const double reach_sq = reach * reach;
-  set.grid.forEachRangeWithin(p, set.contact_reach, [&](std::uint32_t lo, std::uint32_t hi) {
+  set.grid.forEachRangeWithin(p, set.sample_reach, [&](std::uint32_t lo, std::uint32_t hi) {
     for (std::uint32_t k = lo; k < hi; ++k) {
       const double d_sq = (p - set.position[k]).squaredNorm();
       if (d_sq < reach_sq) f(k, d_sq);
@@ -280,40 +376,54 @@ void Boundaries::forEachSampleNear(const Vec3& x, F&& f) const {
 }
 
 std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxContacts>& out) const {
+  // A body is in contact when x is closer than the fluid radius to its exact surface: the
+  // same test as the position correction and the penetration count, so that velocity
+  // control stops fluid before the correction would have to move it (a correction of a
+  // particle that control let through does work against the pressure: it pumps energy
+  // into the fluid). Sample cells only say where a surface may be near.
+  const double rf = radius_;
   std::size_t count = 0;
-  // Keeps the nearest sample per body; ties go to the lower sample index, so the result
-  // does not depend on the visit order.
-  auto offer = [&](std::uint32_t body, std::uint32_t k, double d_sq) {
-    std::size_t c = 0;
-    while (c < count && out[c].body != body)
-      ++c;
-    if (c < count) {
-      if (d_sq < out[c].dist_sq || (d_sq == out[c].dist_sq && k < out[c].sample))
-        out[c].sample = k, out[c].dist_sq = d_sq;
-    } else if (count < kMaxContacts) {
+  auto offer = [&](std::uint32_t body, double d) {
+    if (!(d < rf)) return;
+    if (count < kMaxContacts) {
       out[count].body = body;
-      out[count].sample = k;
-      out[count].dist_sq = d_sq;
+      out[count].distance = d;
       ++count;
-    } else {
-      // More bodies than slots: replace the farthest contact if this one is nearer.
-      std::size_t far = 0;
-      for (std::size_t q = 1; q < count; ++q)
-        if (out[q].dist_sq > out[far].dist_sq) far = q;
-      if (d_sq < out[far].dist_sq)
-        out[far].body = body, out[far].sample = k, out[far].dist_sq = d_sq;
+      return;
     }
+    // More bodies than slots: replace the farthest contact if this one is nearer.
+    std::size_t far = 0;
+    for (std::size_t q = 1; q < count; ++q)
+      if (out[q].distance > out[far].distance) far = q;
+    if (d < out[far].distance) out[far].body = body, out[far].distance = d;
   };
-  forEachSampleNear(x, [&](std::uint32_t body, const Body*, const SampleSet&, std::uint32_t k,
-                           const Vec3&, double d_sq) { offer(body, k, d_sq); });
+  if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
+    for (const std::uint32_t bi : static_bodies_) {
+      const Body& b = bodies_[bi];
+      if (b.contact_bounds.contains(x))
+        offer(bi, b.settings.shape->signedDistance(b.settings.pose.toBody(x)));
+    }
+  }
+  if (moving_reach_.contains(x)) {
+    for (const MovingBody& m : moving_) {
+      if (!m.world_reach.contains(x)) continue;
+      const Body& b = bodies_[m.body];
+      const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
+      if (!m.samples.reach_box.contains(p) ||
+          !(m.samples.near[m.samples.grid.cellIndex(p)] & kNearContact))
+        continue;
+      offer(m.body, b.settings.shape->signedDistance(p));
+    }
+  }
   if (count == 0) return 0;
   std::sort(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(count),
             [](const Contact& a, const Contact& b) {
-              return a.dist_sq < b.dist_sq || (a.dist_sq == b.dist_sq && a.body < b.body);
+              return a.distance < b.distance || (a.distance == b.distance && a.body < b.body);
             });
+  std::size_t kept = 0;
   for (std::size_t c = 0; c < count; ++c)
-    contactGeometry(x, out[c]);
-  return count;
+    if (contactGeometry(x, out[c])) out[kept++] = out[c];
+  return kept;
 }
 
 std::size_t Boundaries::penaltyTerms(const Vec3& x, double strength,
@@ -351,29 +461,37 @@ std::size_t Boundaries::penaltyTerms(const Vec3& x, double strength,
   return count;
 }
 
-void Boundaries::contactGeometry(const Vec3& x, Contact& ct) const {
-  // The sample found the contact; its geometry comes from the exact shape, so edges and
-  // corners push the fluid the right way: n = grad SDF at x, x_cp = x - SDF(x) n.
+bool Boundaries::contactGeometry(const Vec3& x, Contact& ct) const {
+  // n = grad SDF at x, x_cp = x - SDF(x) n: edges and corners push the fluid the
+  // shortest way out.
   const Body& b = bodies_[ct.body];
   const Shape& shape = *b.settings.shape;
   const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
-  const double d = shape.signedDistance(p);
+  const double d = ct.distance;
   const Vec3 grad = sdfGradient(shape, p, 1e-3 * radius_);
   if (!grad.isZero() && std::isfinite(d)) {
     ct.normal = b.rotation * grad;
     ct.point = x - d * ct.normal;
-    return;
+    return true;
   }
-  // No gradient (on a medial point): the sample's own normal and surface point.
-  if (b.moving < 0) {
-    ct.normal = static_.normal[ct.sample];
-    ct.point = static_.position[ct.sample] + radius_ * ct.normal;
-  } else {
-    const SampleSet& set = moving_[b.moving].samples;
-    ct.normal = b.rotation * set.normal[ct.sample];
-    ct.point = b.rotation * (set.position[ct.sample] + radius_ * set.normal[ct.sample]) +
-               b.settings.pose.position;
-  }
+  // No gradient (x on a medial point, e.g. midway in a slot of the body): the nearest
+  // sample's normal and surface point.
+  const SampleSet& set = b.moving < 0 ? static_ : moving_[b.moving].samples;
+  const Vec3 q = b.moving < 0 ? x : p;
+  double best = std::numeric_limits<double>::infinity();
+  std::uint32_t nearest = 0;
+  set.grid.forEachRangeWithin(q, set.contact_reach, [&](std::uint32_t lo, std::uint32_t hi) {
+    for (std::uint32_t k = lo; k < hi; ++k) {
+      const double d_sq = (q - set.position[k]).squaredNorm();
+      if (set.body[k] == ct.body && (d_sq < best || (d_sq == best && k < nearest)))
+        best = d_sq, nearest = k;
+    }
+  });
+  if (!std::isfinite(best)) return false;
+  ct.normal = b.rotation * set.normal[nearest];
+  ct.point = b.rotation * (set.position[nearest] + radius_ * set.normal[nearest]);
+  if (b.moving >= 0) ct.point += b.settings.pose.position;
+  return true;
 }
 
 void Boundaries::correctPositions(std::vector<Vec3>& x,

@@ -33,7 +33,9 @@ struct BodySettings {
   Vec3 angular_velocity = Vec3::Zero();  ///< rad/s, world
   double mass = 0.0;                     ///< kg, dynamic bodies (SimpleRigidBodies)
   Vec3 inertia = Vec3::Zero();           ///< kg m^2, principal moments, body space
-  double slip = 0.0;                     ///< eps in [0, 1]: 0 no-slip, 1 free slip
+  /// eps in [0, 1]: the wall exerts (1 - eps) times the viscous shear stress of a no-slip
+  /// wall (Boundaries::addWallTerms): 0 no-slip, 1 free slip. Independent of the step.
+  double slip = 0.0;
   double restitution = 0.0;              ///< delta in [0, 1]: 0 inelastic
 
   bool moves() const { return kind != BodyKind::Static; }
@@ -41,11 +43,11 @@ struct BodySettings {
   bool twoWay() const { return kind == BodyKind::Dynamic && coupling == CouplingMode::TwoWay; }
 };
 
-/// Contact of one fluid particle with one body: the body's nearest overlapping sample.
+/// Contact of one fluid particle with one body: its centre is closer than the fluid
+/// radius to the body's exact surface.
 struct Contact {
   std::uint32_t body = 0;      ///< body index
-  std::uint32_t sample = 0;    ///< the body's sample (index into its sorted samples)
-  double dist_sq = 0;          ///< m^2, squared distance fluid centre - sample centre
+  double distance = 0;         ///< m, signed distance of the fluid centre to the surface
   Vec3 point = Vec3::Zero();   ///< contact point x_cp on the exact surface, world
   Vec3 normal = Vec3::Zero();  ///< outward unit normal n of the exact surface, world
 };
@@ -81,13 +83,33 @@ class Boundaries {
   /// Adds the boundary's share rho0 * sum_k V_k W(x_a - x_k) to each fluid density.
   void addDensity(const Fluid& fluid, std::vector<double>& density) const;
 
+  /// The walls' part of the fluid's sums, in one pass over the samples within the kernel
+  /// support of each fluid particle (positions and velocities now, bodies at their states
+  /// now):
+  /// - `density` (n): adds the boundary's share, as addDensity();
+  /// - `shear` (n, m/s^2): the walls' viscous shear, written. The samples take part in
+  ///   the fluid's laminar viscosity (Morris et al. 1997) as a layer of fluid moving with
+  ///   the wall: a_a = -sum_k (1 - eps_k) 2 nu_a V_k beta_ak (-x_ak . grad W_ak) /
+  ///   (|x_ak|^2 + 0.01 H^2) (v_a - v_k). beta_ak = min(2, 1 + r / d_a) (Morris's
+  ///   extrapolation: d_a is the particle's distance beyond the sample's surface plane and
+  ///   the sample lies r behind it) puts the no-slip condition on the wall's surface, not
+  ///   on the sample layer. A force, integrated with the step: slip eps (the body's) is a
+  ///   property of the wall, not of dt, and a wall never holds fluid against gravity.
+  /// - `reaction` (bodies): the shear's force and torque (about the centre of mass) on
+  ///   each two-way body; zero for the others. Summed in fixed particle chunks: the same
+  ///   bits on any number of threads.
+  void addWallTerms(const Fluid& fluid, std::vector<double>& density, std::vector<Vec3>& shear,
+                    std::vector<Wrench>& reaction) const;
+
   /// Most bodies one fluid particle is in contact with at once (the nearest are kept).
   static constexpr std::size_t kMaxContacts = 8;
-  /// Contacts of a fluid centre x with every body: the nearest overlapping sample per
-  /// body (|x - x_b| < r_f + r_b), nearest first. The contact's normal is the gradient of
+  /// Contacts of a fluid centre x with every body whose exact surface is closer than the
+  /// fluid radius r_f (signed distance < r_f: the same test as the position correction
+  /// and the penetration count), nearest first. The contact's normal is the gradient of
   /// the exact shape's signed distance at x and its point the nearest surface point
   /// (DESIGN.md §3: normals from the exact shape), so corners and edges push fluid out
-  /// along the shortest way. Returns how many were written.
+  /// along the shortest way. The samples only tell where a surface may be near.
+  /// Returns how many were written.
   std::size_t findContacts(const Vec3& x, std::array<Contact, kMaxContacts>& out) const;
   /// Monaghan's penalty force (the paper's baseline, coupling/penalty.hpp) on a fluid
   /// centre x, per unit fluid mass, from every sample closer than r0 = r_f + r_b:
@@ -127,15 +149,17 @@ class Boundaries {
     std::vector<Vec3> position, normal;
     std::vector<double> volume;
     std::vector<std::uint32_t> body;  ///< owning body (static set)
-    std::vector<std::uint8_t> near;   ///< (cells) kNear* bits (static set)
+    std::vector<std::uint8_t> near;   ///< (cells) kNear* bits
     int density_reach = 1;            ///< cells to search for the kernel support
-    int contact_reach = 1;            ///< cells to search for contacts (r_f + r_b)
+    int sample_reach = 1;             ///< cells to search for samples within r_f + r_b
+    int contact_reach = 1;            ///< cells around a sample where a contact may be
   };
   struct Body {
     BodySettings settings;
     SurfaceSamples local;  ///< body-space samples (cleared after finalize)
     std::size_t sample_count = 0;
     Aabb world_bounds;                 ///< bounds of the exact shape in world space (clipped)
+    Aabb contact_bounds;               ///< world_bounds grown by the fluid radius
     double extent = 0.0;               ///< max |sample| in body space
     std::int32_t moving = -1;          ///< index into moving_, or -1 (static)
     Mat3 rotation = Mat3::Identity();  ///< body -> world
@@ -160,10 +184,21 @@ class Boundaries {
   /// space (world, or the moving body's frame); `moving` is that body (nullptr: static).
   template <class F>
   void forEachSampleNear(const Vec3& x, F&& f) const;
-  /// Contact point and normal of a fluid centre x from the body's exact shape.
-  void contactGeometry(const Vec3& x, Contact& ct) const;
+  /// Contact point and normal of a fluid centre x from the body's exact shape (its
+  /// distance already in ct). False when neither the shape nor a sample gives a normal.
+  bool contactGeometry(const Vec3& x, Contact& ct) const;
   /// Boundary density sum sum_k V_k W(p - x_k) over `set` (p in the set's space).
   double densitySum(const SampleSet& set, const Vec3& p) const;
+  /// Shear sums of one set at p (set space) for a fluid particle of viscosity nu whose
+  /// velocity relative to the set's frame is u (the set turns with omega, set space):
+  /// adds sum_k w_k (u - omega x x_k) to `shear` and, when `moment` is given,
+  /// sum_k w_k x_k x (u - omega x x_k) to it (w_k of addWallTerms, 1/s). Returns the
+  /// density sum sum_k V_k W.
+  /// addDensity and addWallTerms: shear and reaction may be null (density only).
+  void wallPass(const Fluid& fluid, std::vector<double>& density, std::vector<Vec3>* shear,
+                std::vector<Wrench>* reaction) const;
+  double wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u,
+                  const Vec3& omega, Vec3& shear, Vec3* moment) const;
 
   FluidParams fluid_;
   CubicSplineKernel kernel_;
@@ -171,10 +206,16 @@ class Boundaries {
   double spacing_, radius_;
   double volume_scale_;  ///< s^3 * sum of W over a flat sample lattice: V_k numerator
   std::vector<Body> bodies_;
+  std::vector<double> shear_factor_;  ///< (bodies) 1 - slip
+  std::vector<std::uint32_t> static_bodies_;  ///< indices of the static bodies
   SampleSet static_;
   std::vector<MovingBody> moving_;
   Aabb moving_reach_;  ///< union of the moving bodies' world_reach
   bool finalized_ = false;
+  bool any_shear_ = false;  ///< some body has slip < 1
+  /// Particles per chunk of addWallTerms' reaction sums (fixed: determinism).
+  static constexpr std::size_t kChunk = 2048;
+  mutable std::vector<Wrench> chunk_reaction_;  ///< scratch: (chunks x bodies)
 };
 
 }  // namespace wake

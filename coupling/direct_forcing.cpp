@@ -27,14 +27,10 @@ Vec3 localImpulse(double particle_mass, double body_inverse_mass, const Mat3& in
 }
 
 void GlobalSystem::add(const GlobalContact& c) {
-  const Mat3 r = crossMatrix(c.lever);
-  const double m = c.mass;
-  a_.topLeftCorner<3, 3>().diagonal().array() += m;
-  a_.topRightCorner<3, 3>() -= m * r;  // S^T = (sum m R)^T = -sum m R
-  a_.bottomLeftCorner<3, 3>() += m * r;
-  a_.bottomRightCorner<3, 3>() += m * r.transpose() * r;
-  b_.head<3>() -= m * c.psi;
-  b_.tail<3>() -= m * (r * c.psi);
+  Vec6 g;
+  g << c.normal, c.lever.cross(c.normal);
+  a_.noalias() += c.mass * g * g.transpose();
+  b_ -= (c.mass * c.psi) * g;
 }
 
 Mat3 inertiaFromInverse(const Mat3& inverse_inertia) {
@@ -89,8 +85,9 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMetho
   };
   // Passes that only remove approach velocity towards one of several bodies, whose
   // contact points move with v_cp + extra(rec).
-  auto normalPasses = [&](Chunk& ch, const Record* rec, std::size_t count, Vec3& vi, auto&& extra) {
-    for (int pass = 0; pass < 2; ++pass) {
+  auto normalPasses = [&](Chunk& ch, const Record* rec, std::size_t count, Vec3& vi, auto&& extra,
+                          int passes) {
+    for (int pass = 0; pass < passes; ++pass) {
       for (std::size_t c = 0; c < count; ++c) {
         const double vn = (vi - rec[c].v_cp - extra(rec[c])).dot(rec[c].normal);
         const double target_n = vn > 0.0 ? vn : rec[c].bounce;
@@ -133,38 +130,27 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMetho
         // Restitution reflects only the approach speed at the start of the step.
         const double vn_old = (v_old[i] - now[ct.body].pointVelocity(ct.point)).dot(ct.normal);
         rec.bounce = -body.restitution * std::min(0.0, vn_old);
-        const Vec3 vr = v[i] - rec.v_cp;  // predicted relative velocity v*_r
-        const double vn = vr.dot(ct.normal);
-        const double target_n = vn > 0.0 ? vn : rec.bounce;  // eq. 9: no sticking
-        rec.psi = body.slip * (vr - vn * ct.normal) + target_n * ct.normal - vr;
+        // Eq. 8-9's normal part: restitution, and no sticking (a separating contact is
+        // left alone). The tangential part is the walls' viscous shear, already in v*
+        // (Boundaries::addWallTerms), so the control leaves it as it is.
+        const double vn = (v[i] - rec.v_cp).dot(ct.normal);  // predicted, v*_r . n
+        const double target_n = vn > 0.0 ? vn : rec.bounce;
+        rec.psi = target_n - vn;
         ch.records.push_back(rec);
       }
       if (global) {
         for (std::size_t k = first; k < ch.records.size(); ++k) {
           const Record& rec = ch.records[k];
           if (two_way[rec.body])
-            ch.system[rec.body].add({m / double(rec.count), rec.lever, rec.psi});
+            ch.system[rec.body].add({m / double(rec.count), rec.lever, rec.normal, rec.psi});
         }
         continue;
       }
-      // Local: contacts one after the other, each to its full target (eq. 8-9), then
-      // normal-only passes when there are several.
+      // Local: each contact's normal impulse, then a few passes when there are several
+      // (an impulse towards one body must not push the particle into another).
       Vec3 vi = v[i];
-      for (std::size_t k = first; k < ch.records.size(); ++k) {
-        const Record& rec = ch.records[k];
-        const BodySettings& body = boundaries.body(rec.body);
-        const Vec3 vr = vi - rec.v_cp;
-        const double vn = vr.dot(rec.normal);
-        const double target_n = vn > 0.0 ? vn : rec.bounce;
-        const Vec3 psi = body.slip * (vr - vn * rec.normal) + target_n * rec.normal - vr;
-        const RigidPrediction& p = predicted[rec.body];
-        const Vec3 j = two_way[rec.body] ? localImpulse(m, p.inverse_mass, p.inverse_inertia_world,
-                                                        rec.lever, psi)
-                                         : Vec3(m * psi);
-        applyImpulse(ch, rec, j, vi);
-      }
-      if (count > 1)
-        normalPasses(ch, &ch.records[first], count, vi, [](const Record&) { return Vec3::Zero(); });
+      normalPasses(ch, &ch.records[first], count, vi, [](const Record&) { return Vec3::Zero(); },
+                   count > 1 ? 3 : 1);
       v[i] = vi;
     }
   }
@@ -185,6 +171,7 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMetho
   };
   if (!global) {
     reduceImpulses();
+    supportBackedContacts(boundaries, dt, v, predicted, two_way, chunk_count, wrench);
     return result;
   }
 
@@ -215,17 +202,84 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMetho
       const Record* rec = &ch.records[k];
       const std::size_t count = rec->count;
       const std::uint32_t i = rec->particle;
-      // Each contact's share of the particle: its psi plus the body's velocity change.
+      // Each contact's share of the particle: its psi plus the body's normal velocity
+      // change at the contact, along the normal.
       Vec3 vi = v[i];
       for (std::size_t q = 0; q < count; ++q)
-        vi += (rec[q].psi + bodyChange(rec[q])) / double(count);
-      if (count > 1) normalPasses(ch, rec, count, vi, bodyChange);
+        vi += ((rec[q].psi + rec[q].normal.dot(bodyChange(rec[q]))) / double(count)) *
+              rec[q].normal;
+      if (count > 1) normalPasses(ch, rec, count, vi, bodyChange, 2);
       v[i] = vi;
       k += count;
     }
   }
   reduceImpulses();
+  supportBackedContacts(boundaries, dt, v, predicted, two_way, chunk_count, wrench);
   return result;
+}
+
+void DirectForcing::supportBackedContacts(const Boundaries& boundaries, double dt,
+                                          const std::vector<Vec3>& v,
+                                          const std::vector<RigidPrediction>& predicted,
+                                          const std::vector<std::uint8_t>& two_way,
+                                          std::size_t chunk_count, std::vector<Wrench>& wrench) {
+  // A particle pressed between a two-way body and a one-way one (a box settling on the
+  // floor, a body pushed against a wall) cannot give way: the one-way contact fixes its
+  // normal velocity. So the two-way body meets it as it would meet the wall: the contact's
+  // impulse acts on the body alone (infinite particle mass) until the body no longer
+  // approaches the particle. Solved for all such contacts of a body at once by projected
+  // Gauss-Seidel (accumulated impulses >= 0), in the fixed order of the particles.
+  backed_.clear();
+  for (std::size_t c = 0; c < chunk_count; ++c) {
+    const std::vector<Record>& records = chunks_[c].records;
+    for (std::size_t k = 0; k < records.size();) {
+      const Record* rec = &records[k];
+      const std::size_t count = rec->count;
+      for (std::size_t a = 0; a < count && count > 1; ++a) {
+        if (!two_way[rec[a].body]) continue;
+        bool backed = false;
+        for (std::size_t b = 0; b < count; ++b)
+          backed = backed || (!two_way[rec[b].body] && rec[a].normal.dot(rec[b].normal) < -0.5);
+        if (backed) backed_.push_back(rec[a]);
+      }
+      k += count;
+    }
+  }
+  if (backed_.empty()) return;
+  const std::size_t nb = wrench.size();
+  for (std::size_t b = 0; b < nb; ++b) {
+    if (!two_way[b]) continue;
+    const RigidPrediction& p = predicted[b];
+    const Mat3& inv_i = p.inverse_inertia_world;
+    // The body's velocity change from the control so far.
+    Vec3 dV = wrench[b].force * (dt * p.inverse_mass);
+    Vec3 dW = inv_i * wrench[b].torque * dt;
+    Vec3 impulse = Vec3::Zero(), angular = Vec3::Zero();
+    lambda_.assign(backed_.size(), 0.0);
+    for (int iteration = 0; iteration < 20; ++iteration) {
+      double largest = 0.0;
+      for (std::size_t c = 0; c < backed_.size(); ++c) {
+        const Record& rec = backed_[c];
+        if (rec.body != b) continue;
+        const Vec3 v_body = rec.v_cp + dV + dW.cross(rec.lever);
+        const double vn = (v[rec.particle] - v_body).dot(rec.normal);
+        const Vec3 rn = rec.lever.cross(rec.normal);
+        const double k = p.inverse_mass + rn.dot(inv_i * rn);  // n^T K_body n
+        const double j = std::max(-lambda_[c], (rec.bounce - vn) / k);
+        if (j == 0.0) continue;
+        lambda_[c] += j;
+        // The particle would take +j n: the body takes -j n at the lever.
+        dV -= (j * p.inverse_mass) * rec.normal;
+        dW -= inv_i * (j * rn);
+        impulse -= j * rec.normal;
+        angular -= j * rn;
+        largest = std::max(largest, std::abs(j) * k);
+      }
+      if (largest < 1e-9) break;
+    }
+    wrench[b].force += impulse / dt;
+    wrench[b].torque += angular / dt;
+  }
 }
 
 }  // namespace wake

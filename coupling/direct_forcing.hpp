@@ -1,12 +1,15 @@
 // Velocity control by direct forcing (DESIGN.md §4; Becker et al. 2009, eq. 8-18).
 //
-// Each fluid particle in contact with a body gets the velocity change psi that takes its
-// relative velocity to the target of eq. 8-9 (slip eps, restitution delta). For a one-way
-// body (static, kinematic, or dynamic marked one-way) the body does not react. For a
-// two-way body the control force's reaction goes into the body's wrench:
-//   local:  each contact alone, with the 3x3 effective mass K of particle and body;
+// Each fluid particle in contact with a body gets the normal velocity change psi that takes
+// its relative normal velocity to the target of eq. 8-9's normal part (restitution delta;
+// a separating contact is left alone). The tangential part of eq. 8 (slip eps) is not a
+// per-step target here: it is the walls' viscous shear (Boundaries::addWallTerms), a force
+// that does not depend on the step. For a one-way body (static, kinematic, or dynamic
+// marked one-way) the body does not react. For a two-way body the control impulse (along
+// the normal) has its reaction in the body's wrench:
+//   local:  each contact alone, with the effective mass 1 / (n^T K n) of particle and body;
 //   global: all contacts of one body at once, a 6x6 SPD system for the body's velocity
-//           change, so that every contact ends exactly on its target.
+//           change, so that every contact ends exactly on its normal target.
 // A particle touching several bodies (the paper leaves this open) shares its mass among
 // its contacts in the global system, and a few normal-only passes afterwards remove any
 // approach velocity left towards one of them.
@@ -40,15 +43,23 @@ Mat3 contactMatrix(double particle_mass, double body_inverse_mass, const Mat3& i
 Vec3 localImpulse(double particle_mass, double body_inverse_mass, const Mat3& inverse_inertia,
                   const Vec3& lever, const Vec3& psi);
 
-/// One contact of the global system: the particle's mass share, lever and psi.
+/// One contact of the global system: the particle's mass share, lever, normal and the
+/// normal velocity change it needs.
 struct GlobalContact {
-  double mass = 0;            ///< kg, the particle's mass (shared among its contacts)
-  Vec3 lever = Vec3::Zero();  ///< r = x_cp - x_c
-  Vec3 psi = Vec3::Zero();    ///< velocity change the contact needs, body at rest
+  double mass = 0;             ///< kg, the particle's mass (shared among its contacts)
+  Vec3 lever = Vec3::Zero();   ///< r = x_cp - x_c
+  Vec3 normal = Vec3::Zero();  ///< n, outward unit normal of the body's surface
+  double psi = 0;              ///< m/s, change of the normal relative velocity, body at rest
 };
 
-/// Global approach for one body: accumulates the 6x6 matrix A and right-hand side b of
-/// A [dV; dW] = b (DESIGN.md §4), starting from the body's own mass and inertia.
+/// Global approach for one body, normal form: every contact i takes an impulse j_i n_i
+/// along its normal only (the tangential part is the walls' viscous shear), the body the
+/// opposite, and every contact's normal relative velocity changes by exactly psi_i. With
+/// g_i = [n_i; r_i x n_i] the body's velocity change [dV; dW] solves the 6x6 symmetric
+/// positive definite system
+///   (diag(m_c E, I) + sum m_i g_i g_i^T) [dV; dW] = -sum m_i psi_i g_i
+/// (the Woodbury form of the k x k contact system), and each particle gets
+/// v_i += (psi_i + n_i . (dV + dW x r_i)) n_i.
 class GlobalSystem {
  public:
   GlobalSystem() { clear(); }
@@ -68,8 +79,8 @@ class GlobalSystem {
   Vec6 solve(double inverse_mass, const Mat3& inverse_inertia) const;
 
  private:
-  Mat6 a_;  ///< contact part: [M E, S^T; S, sum m R^T R]
-  Vec6 b_;
+  Mat6 a_;  ///< contact part: sum m g g^T
+  Vec6 b_;  ///< -sum m psi g
 };
 
 /// The world inertia I from its inverse; a locked axis (zero inverse) becomes very stiff.
@@ -105,7 +116,7 @@ class DirectForcing {
     Vec3 lever = Vec3::Zero();
     Vec3 v_cp = Vec3::Zero();  ///< contact-point velocity of the predicted body
     Vec3 normal = Vec3::Zero();
-    Vec3 psi = Vec3::Zero();  ///< velocity change to the target, body unmoved
+    double psi = 0;  ///< normal velocity change to the target, body unmoved (m/s)
   };
   struct Chunk {
     std::vector<Record> records;
@@ -114,8 +125,18 @@ class DirectForcing {
   };
   static constexpr std::size_t kChunk = 2048;  ///< particles per chunk (fixed: determinism)
 
+  /// Contacts of two-way bodies with particles that a one-way body backs: their impulse
+  /// goes to the body alone (projected Gauss-Seidel), so the body rests on the particle
+  /// as on the wall behind it and cannot squeeze it into either.
+  void supportBackedContacts(const Boundaries& boundaries, double dt, const std::vector<Vec3>& v,
+                             const std::vector<RigidPrediction>& predicted,
+                             const std::vector<std::uint8_t>& two_way, std::size_t chunk_count,
+                             std::vector<Wrench>& wrench);
+
   double particle_mass_;
   std::vector<Chunk> chunks_;
+  std::vector<Record> backed_;   ///< scratch: backed contacts, in particle order
+  std::vector<double> lambda_;   ///< scratch: their accumulated impulses (N s)
 };
 
 }  // namespace wake

@@ -52,6 +52,8 @@ void validate(const SimulationSettings& s) {
   require(std::isfinite(f.speed_of_sound) && f.speed_of_sound >= 0, "fluid.speed_of_sound",
           "must be > 0 or auto");
   require(std::isfinite(f.viscosity) && f.viscosity >= 0, "fluid.viscosity", "must be >= 0");
+  require(std::isfinite(f.kinematic_viscosity) && f.kinematic_viscosity >= 0,
+          "fluid.kinematic_viscosity", "must be >= 0");
   require(std::isfinite(f.gamma) && f.gamma > 0, "fluid.gamma", "must be > 0");
   require(f.smoothing_ratio >= 0.8 && f.smoothing_ratio <= 2.0, "fluid.smoothing_ratio",
           "must be in [0.8, 2]");
@@ -61,6 +63,8 @@ void validate(const SimulationSettings& s) {
     const FluidBlock& b = s.blocks[i];
     const std::string field = "fluid.blocks[" + std::to_string(i) + "]";
     require(finite(b.min) && finite(b.max) && finite(b.velocity), field, "must be finite");
+    require(std::isfinite(b.kinematic_viscosity), field + ".kinematic_viscosity",
+            "must be finite (>= 0, or < 0 for the fluid's)");
     require((b.max.array() > b.min.array()).all(), field + ".max",
             "must be greater than min on every axis");
   }
@@ -158,6 +162,8 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
   FluidState& st = fluid_->state();
   std::uint32_t next_id = 0;
   for (const FluidBlock& b : s.blocks) {
+    const double nu = b.kinematic_viscosity >= 0 ? b.kinematic_viscosity
+                                                  : s.fluid.kinematic_viscosity;
     Eigen::Vector3i count;
     for (int k = 0; k < 3; ++k)
       count[k] = std::max(1, static_cast<int>(std::lround((b.max[k] - b.min[k]) / sp)));
@@ -171,9 +177,10 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
             ++next_id;
             continue;
           }
-          st.append(x, b.velocity, next_id++);
+          st.append(x, b.velocity, next_id++, nu);
         }
   }
+  nu_max_ = fluid_->maxKinematicViscosity();
 }
 
 Simulation::~Simulation() = default;
@@ -223,6 +230,8 @@ double Simulation::chooseDt(double t_limit) const {
   if (a_max > 0) dt = std::min(dt, 0.25 * std::sqrt(h / a_max));
   // No particle may move more than its radius in one step (towards a boundary or not).
   if (v_max > 0) dt = std::min(dt, f.particle_radius / v_max);
+  // Explicit viscosity (Morris et al. 1997): dt <= 0.125 H^2 / nu.
+  if (nu_max_ > 0) dt = std::min(dt, 0.125 * h * h / nu_max_);
   const double remaining = t_limit - time_;
   // Land exactly on t_limit, and never leave a sliver step behind.
   if (remaining <= dt) return remaining;
@@ -243,14 +252,15 @@ double Simulation::step(double t_limit) {
   fluid_->computeFluidDensity();
   timings_.density += secondsSince(t0);
   t0 = Clock::now();
-  boundaries_->addDensity(*fluid_, st.density);
+  // The walls' density share and viscous shear (their part of the fluid's sums).
+  boundaries_->addWallTerms(*fluid_, st.density, wall_shear_, wall_reaction_);
   timings_.boundary += secondsSince(t0);
   t0 = Clock::now();
   fluid_->computePressure();
   timings_.density += secondsSince(t0);
 
   t0 = Clock::now();
-  fluid_->computeAccelerations(settings_.gravity);
+  fluid_->computeAccelerations(settings_.gravity, wall_shear_);
   timings_.forces += secondsSince(t0);
   if (penalty_) {
     // Baseline: boundary forces join the fluid's forces; no control, no correction.
@@ -299,7 +309,12 @@ double Simulation::step(double t_limit) {
     timings_.boundary += t_control;
   }
 
-  // The bodies take exactly one step with the fluid's wrench.
+  // The bodies take exactly one step with the fluid's wrench: control (or penalty) plus
+  // the walls' viscous shear.
+  for (std::size_t b = 0; b < nb; ++b) {
+    wrench_[b].force += wall_reaction_[b].force;
+    wrench_[b].torque += wall_reaction_[b].torque;
+  }
   t0 = Clock::now();
   if (nb > 0) rigid_->step(dt, wrench_);
   body_final_.resize(nb);

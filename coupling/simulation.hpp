@@ -24,6 +24,9 @@ struct FluidBlock {
   Vec3 min = Vec3::Zero();       ///< m
   Vec3 max = Vec3::Zero();       ///< m, > min on every axis
   Vec3 velocity = Vec3::Zero();  ///< m/s, initial velocity of the block
+  /// m^2/s, kinematic viscosity of this block's fluid, >= 0; < 0 (default): the fluid's
+  /// FluidParams::kinematic_viscosity. Blocks of different viscosities may share a run.
+  double kinematic_viscosity = -1.0;
 };
 
 struct SimulationSettings {
@@ -92,6 +95,9 @@ class Simulation {
   const std::vector<Wrench>& lastWrenches() const { return wrench_; }
   /// Particle-body contacts found in the last step.
   std::size_t lastContacts() const { return last_contacts_; }
+  /// (n) 1 where a fluid particle (in the current order) was in contact in the last step
+  /// (with the penalty method: a sample within the penalty reach).
+  const std::vector<std::uint8_t>& lastInContact() const { return flags_; }
 
   std::size_t fluidParticles() const { return fluid_->state().size(); }
   std::size_t boundaryParticles() const;
@@ -131,6 +137,7 @@ class Simulation {
   double time_ = 0;
   std::uint64_t steps_ = 0;
   double last_dt_ = 0;
+  double nu_max_ = 0;  // m^2/s, largest kinematic viscosity of the fluid (set at start)
   std::size_t removed_at_start_ = 0, lost_ = 0, max_penetrating_ = 0;
   double max_density_ratio_ = 0;
   double window_density_ratio_ = 0;
@@ -142,6 +149,8 @@ class Simulation {
   std::vector<RigidState> body_now_, body_final_;  // scratch: body states at t and t + dt
   std::vector<RigidPrediction> body_pred_;         // scratch: predicted body states
   std::vector<Wrench> wrench_;
+  std::vector<Vec3> wall_shear_;      // scratch: (n) the walls' viscous shear, m/s^2
+  std::vector<Wrench> wall_reaction_;  // scratch: (bodies) its reaction on two-way bodies
   std::size_t last_contacts_ = 0;
 };
 

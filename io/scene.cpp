@@ -72,6 +72,8 @@ struct Range {
 const Range kAnyNumber{};
 const Range kPositive{0.0, kInf, true, false};
 const Range kNonNegative{0.0, kInf, false, false};
+/// m^2/s: from inviscid to a thick syrup; the explicit step shrinks as 0.125 H^2 / nu.
+const Range kViscosityRange{0.0, 1.0, false, false};
 const Range kUnitInterval{0.0, 1.0, false, false};
 
 /// Where a value sits: the file and the field path inside it ("fluid.blocks[0].max").
@@ -285,7 +287,7 @@ void readTime(const ObjectReader& time, SceneFile& scene) {
 
 void readFluid(const ObjectReader& fluid, SimulationSettings& sim) {
   fluid.allowOnly({"particle_radius", "rest_density", "speed_of_sound", "viscosity",
-                   "smoothing_ratio", "blocks"});
+                   "kinematic_viscosity", "smoothing_ratio", "blocks"});
   FluidParams& p = sim.fluid;
   p.particle_radius = fluid.number("particle_radius", kPositive);
   p.rest_density = fluid.number("rest_density", 1000.0, kPositive);
@@ -297,6 +299,8 @@ void readFluid(const ObjectReader& fluid, SimulationSettings& sim) {
     p.speed_of_sound = toNumber(fluid.at("speed_of_sound"), *c, kPositive);
   }
   p.viscosity = fluid.number("viscosity", 0.1, kNonNegative);
+  p.kinematic_viscosity =
+      fluid.number("kinematic_viscosity", FluidParams().kinematic_viscosity, kViscosityRange);
   p.smoothing_ratio = fluid.number("smoothing_ratio", 1.0, Range{0.8, 2.0, false, false});
 
   const Where blocks_at = fluid.at("blocks");
@@ -304,12 +308,13 @@ void readFluid(const ObjectReader& fluid, SimulationSettings& sim) {
   if (blocks.empty()) blocks_at.fail("must list at least one block of fluid");
   for (std::size_t i = 0; i < blocks.size(); ++i) {
     const ObjectReader block(blocks_at.index(i), blocks[i]);
-    block.allowOnly({"min", "max", "velocity"});
+    block.allowOnly({"min", "max", "velocity", "kinematic_viscosity"});
     const Aabb box = block.box("min", "max");
     FluidBlock b;
     b.min = box.min;
     b.max = box.max;
     b.velocity = block.vec3("velocity", Vec3::Zero());
+    b.kinematic_viscosity = block.number("kinematic_viscosity", p.kinematic_viscosity, kViscosityRange);
     sim.blocks.push_back(b);
     if (blockParticles(b, p.spacing()) < 1.0)
       block.where().fail("holds no particles: it is smaller than the lattice spacing " +

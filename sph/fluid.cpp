@@ -35,6 +35,7 @@ void FluidState::resize(std::size_t n) {
   density.resize(n);
   pressure.resize(n);
   id.resize(n);
+  kinematic_viscosity.resize(n);
 }
 
 void FluidState::permute(const std::vector<std::uint32_t>& order, FluidState& scratch) {
@@ -43,9 +44,11 @@ void FluidState::permute(const std::vector<std::uint32_t>& order, FluidState& sc
   gather(position, order, scratch.position);
   gather(velocity, order, scratch.velocity);
   gather(id, order, scratch.id);
+  gather(kinematic_viscosity, order, scratch.kinematic_viscosity);
   position.swap(scratch.position);
   velocity.swap(scratch.velocity);
   id.swap(scratch.id);
+  kinematic_viscosity.swap(scratch.kinematic_viscosity);
   acceleration.resize(order.size());
   density.resize(order.size());
   pressure.resize(order.size());
@@ -58,15 +61,17 @@ void FluidState::removeIf(const std::vector<std::uint8_t>& remove) {
   compact(density, remove);
   compact(pressure, remove);
   compact(id, remove);
+  compact(kinematic_viscosity, remove);
 }
 
-void FluidState::append(const Vec3& x, const Vec3& v, std::uint32_t particle_id) {
+void FluidState::append(const Vec3& x, const Vec3& v, std::uint32_t particle_id, double nu) {
   position.push_back(x);
   velocity.push_back(v);
   acceleration.push_back(Vec3::Zero());
   density.push_back(0.0);
   pressure.push_back(0.0);
   id.push_back(particle_id);
+  kinematic_viscosity.push_back(nu);
 }
 
 Fluid::Fluid(const FluidParams& params, const Aabb& domain)
@@ -145,35 +150,44 @@ void Fluid::computePressure() {
   }
 }
 
-void Fluid::computeAccelerations(const Vec3& gravity) {
+void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& extra) {
   const std::int64_t n = static_cast<std::int64_t>(state_.size());
   const Vec3* x = state_.position.data();
   const Vec3* v = state_.velocity.data();
   const double* rho = state_.density.data();
+  const double* nu = state_.kinematic_viscosity.data();
   const double* pr2 = p_over_rho_sq_.data();
   const std::uint32_t* nb = neighbors_.index.data();
+  const Vec3* add = extra.empty() ? nullptr : extra.data();
   const double h = kernel_.smoothingLength();
   const double eps_sq = 0.01 * h * h;
   // nu = 2 alpha H c / (rho_a + rho_b): the numerator is constant.
   const double visc = 2.0 * params_.viscosity * h * params_.speed_of_sound;
   const double m = mass_;
+  const bool laminar = maxKinematicViscosity() > 0.0;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
     const Vec3 xi = x[i], vi = v[i];
-    const double rho_i = rho[i];
+    const double rho_i = rho[i], inv_rho_i = 1.0 / rho_i, nu_i = nu[i];
     const double pi_term = pr2[i];
-    Vec3 acc = Vec3::Zero();
+    Vec3 acc = Vec3::Zero(), lap = Vec3::Zero();
     for (std::uint64_t k = neighbors_.offset[i], e = neighbors_.offset[i + 1]; k < e; ++k) {
       const std::uint32_t j = nb[k];
       const Vec3 xij = xi - x[j];
+      const Vec3 vij = vi - v[j];
       const double r_sq = xij.squaredNorm();
       const double dwr = kernel_.derivativeOverR(std::sqrt(r_sq));
       double coeff = pi_term + pr2[j];
-      const double vx = (vi - v[j]).dot(xij);
+      const double vx = vij.dot(xij);
       if (vx < 0.0) coeff += -visc / (rho_i + rho[j]) * vx / (r_sq + eps_sq);
       acc -= (m * coeff * dwr) * xij;
+      // Morris: x . grad W = r^2 dW/dr / r (< 0), so v_a is drawn towards v_b.
+      if (laminar)
+        lap += ((nu_i / rho[j] + nu[j] * inv_rho_i) * r_sq * dwr / (r_sq + eps_sq)) * vij;
     }
-    state_.acceleration[i] = acc + gravity;
+    acc += m * lap + gravity;
+    if (add) acc += add[i];
+    state_.acceleration[i] = acc;
   }
 }
 
@@ -184,6 +198,15 @@ double Fluid::maxSpeed() const {
   for (std::int64_t i = 0; i < n; ++i)
     m = std::max(m, state_.velocity[i].squaredNorm());
   return std::sqrt(m);
+}
+
+double Fluid::maxKinematicViscosity() const {
+  double m = 0.0;
+  const std::int64_t n = static_cast<std::int64_t>(state_.size());
+#pragma omp parallel for reduction(max : m) schedule(static)
+  for (std::int64_t i = 0; i < n; ++i)
+    m = std::max(m, state_.kinematic_viscosity[i]);
+  return m;
 }
 
 double Fluid::maxAcceleration() const {

@@ -18,7 +18,10 @@ struct FluidParams {
   double particle_radius = 0.01;  ///< m, > 0; lattice spacing is 2 * particle_radius
   double rest_density = 1000.0;   ///< kg/m^3, > 0
   double speed_of_sound = 0.0;    ///< m/s, > 0 (the scene's "auto" is resolved before)
-  double viscosity = 0.1;         ///< Monaghan's alpha, dimensionless, >= 0
+  double viscosity = 0.1;         ///< Monaghan's artificial alpha, dimensionless, >= 0
+  /// m^2/s, >= 0: physical (laminar) kinematic viscosity nu, Morris et al. 1997; water
+  /// 1e-6. Per particle in FluidState::kinematic_viscosity; this is the fluid's default.
+  double kinematic_viscosity = 1e-6;
   double gamma = 7.0;             ///< Tait exponent, > 0
   double smoothing_ratio = 1.0;   ///< smoothing length H / spacing, in [0.8, 2]
 
@@ -41,6 +44,7 @@ struct FluidState {
   std::vector<double> density;     ///< (n) kg/m^3
   std::vector<double> pressure;    ///< (n) Pa, >= 0
   std::vector<std::uint32_t> id;   ///< (n) permanent particle number
+  std::vector<double> kinematic_viscosity;  ///< (n) m^2/s, nu of the particle's fluid
 
   std::size_t size() const { return position.size(); }
   void resize(std::size_t n);
@@ -49,7 +53,7 @@ struct FluidState {
   void permute(const std::vector<std::uint32_t>& order, FluidState& scratch);
   /// Removes the particles whose `remove` flag is set, keeping the others' order.
   void removeIf(const std::vector<std::uint8_t>& remove);
-  void append(const Vec3& x, const Vec3& v, std::uint32_t particle_id);
+  void append(const Vec3& x, const Vec3& v, std::uint32_t particle_id, double nu);
 };
 
 /// The fluid solver: owns parameters, state, the neighbour grid and scratch space.
@@ -74,11 +78,19 @@ class Fluid {
   void computeFluidDensity();
   /// Tait pressure from density, clamped at zero (no tensile pull at free surfaces).
   void computePressure();
-  /// Pressure + artificial viscosity + gravity accelerations.
-  void computeAccelerations(const Vec3& gravity);
+  /// Pressure + artificial viscosity + physical viscosity + gravity accelerations, plus
+  /// `extra` (n, m/s^2; e.g. the walls' viscous shear) when it is not empty.
+  ///
+  /// Physical viscosity is Morris et al. (1997)'s SPH Laplacian, symmetric in a and b:
+  ///   dv_a/dt += sum_b m_b (nu_a / rho_b + nu_b / rho_a) (x_ab . grad W_ab) /
+  ///              (|x_ab|^2 + 0.01 H^2) v_ab,
+  /// which conserves linear momentum and is exact for linear velocity fields.
+  void computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& extra = {});
 
   /// Largest |v| and |a| over the particles (0 when empty).
   double maxSpeed() const;
+  /// Largest kinematic viscosity of any particle (m^2/s).
+  double maxKinematicViscosity() const;
   double maxAcceleration() const;
 
  private:

@@ -32,7 +32,7 @@ struct WallFixture {
       for (int j = 0; j < 8; ++j)
         for (int i = -6; i < 6; ++i)
           fluid->state().append(Vec3(0.02 * i + 0.01, 0.02 * j + 0.01, 0.02 * k + 0.01),
-                                Vec3::Zero(), id++);
+                                Vec3::Zero(), id++, fluid->params().kinematic_viscosity);
     fluid->updateNeighbors();
     fluid->computeFluidDensity();
     walls->addDensity(*fluid, fluid->state().density);

@@ -25,7 +25,8 @@ void fillLattice(Fluid& fluid, int n, double spacing) {
   for (int k = 0; k < n; ++k)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i)
-        fluid.state().append(spacing * Vec3(i + 0.5, j + 0.5, k + 0.5), Vec3::Zero(), id++);
+        fluid.state().append(spacing * Vec3(i + 0.5, j + 0.5, k + 0.5), Vec3::Zero(), id++,
+                             fluid.params().kinematic_viscosity);
 }
 
 /// Index of the particle nearest to p.
