@@ -171,7 +171,7 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMetho
   };
   if (!global) {
     reduceImpulses();
-    supportBackedContacts(boundaries, dt, v, predicted, two_way, chunk_count, wrench);
+    supportBackedContacts(dt, v, predicted, two_way, chunk_count, wrench);
     return result;
   }
 
@@ -214,11 +214,11 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMetho
     }
   }
   reduceImpulses();
-  supportBackedContacts(boundaries, dt, v, predicted, two_way, chunk_count, wrench);
+  supportBackedContacts(dt, v, predicted, two_way, chunk_count, wrench);
   return result;
 }
 
-void DirectForcing::supportBackedContacts(const Boundaries& boundaries, double dt,
+void DirectForcing::supportBackedContacts(double dt,
                                           const std::vector<Vec3>& v,
                                           const std::vector<RigidPrediction>& predicted,
                                           const std::vector<std::uint8_t>& two_way,

@@ -128,7 +128,7 @@ class DirectForcing {
   /// Contacts of two-way bodies with particles that a one-way body backs: their impulse
   /// goes to the body alone (projected Gauss-Seidel), so the body rests on the particle
   /// as on the wall behind it and cannot squeeze it into either.
-  void supportBackedContacts(const Boundaries& boundaries, double dt, const std::vector<Vec3>& v,
+  void supportBackedContacts(double dt, const std::vector<Vec3>& v,
                              const std::vector<RigidPrediction>& predicted,
                              const std::vector<std::uint8_t>& two_way, std::size_t chunk_count,
                              std::vector<Wrench>& wrench);

@@ -107,7 +107,9 @@ double autoSpeedOfSound(const SimulationSettings& s) {
     }
   }
   const double fall = std::max(0.0, fluid_top - bottom);
-  v_max = std::max({v_max, std::sqrt(2.0 * g * fall), 0.1});
+  // A column of height `fall` released on a floor spreads with Ritter's front speed
+  // 2 sqrt(g fall), faster than free fall over that height (sqrt(2 g fall)).
+  v_max = std::max({v_max, 2.0 * std::sqrt(g * fall), 0.1});
   return 10.0 * v_max;
 }
 
@@ -124,12 +126,22 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
 
   if (s.domain.empty()) {
     // Automatic domain: the scene's bounds grown by a quarter of their largest extent
-    // and two kernel supports on every side.
+    // and two kernel supports on every side, and upwards by twice the height the
+    // fastest expected fluid (c / 10) could rise, at most the scene's extent, so that
+    // splashes and jets up a wall fall back instead of being lost.
     Aabb box = sceneBounds(s);
     require(!box.empty(), "domain", "cannot be derived: the scene has no fluid and no bodies");
-    const double grow = 0.25 * (box.max - box.min).maxCoeff() + 2.0 * s.fluid.supportRadius();
+    const double extent = (box.max - box.min).maxCoeff();
+    const double grow = 0.25 * extent + 2.0 * s.fluid.supportRadius();
     box.min.array() -= grow;
     box.max.array() += grow;
+    const double g = s.gravity.norm();
+    if (g > 0) {
+      const double v = 0.1 * s.fluid.speed_of_sound;
+      const Vec3 rise = (-s.gravity / g) * std::min(v * v / g, extent);
+      box.min = box.min.cwiseMin(box.min + rise);
+      box.max = box.max.cwiseMax(box.max + rise);
+    }
     s.domain = box;
   }
   require(finite(s.domain.min) && finite(s.domain.max) &&
