@@ -21,6 +21,14 @@ double flatLatticeKernelSum(const CubicSplineKernel& kernel, double s) {
   return sum;
 }
 
+/// Share of a no-slip wall's viscous shear that a wall of slip eps exerts: the wall with
+/// Navier slip length b = eps / (1 - eps) * 2H (2H: the kernel support, 4 particle radii
+/// at H = one spacing) over the first fluid layer, which lies one radius r from the
+/// surface: r / (r + b) = (1 - eps) / (1 + 3 eps).
+double wallShearFactor(double eps) {
+  return (1.0 - eps) / (1.0 + 3.0 * eps);
+}
+
 Aabb grown(Aabb b, double by) {
   b.min.array() -= by;
   b.max.array() += by;
@@ -50,7 +58,7 @@ std::size_t Boundaries::addBody(const BodySettings& settings) {
     b.extent = std::max(b.extent, p.norm() + radius_);
   b.rotation = settings.pose.orientation.toRotationMatrix();
   updateWorldBounds(b);
-  shear_factor_.push_back(1.0 - settings.slip);
+  shear_factor_.push_back(wallShearFactor(settings.slip));
   any_shear_ = any_shear_ || settings.slip < 1.0;
   bodies_.push_back(std::move(b));
   return bodies_.size() - 1;
