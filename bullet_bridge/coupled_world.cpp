@@ -147,8 +147,12 @@ CoupledWorld::~CoupledWorld() {
 }
 
 void CoupledWorld::addFluidBlock(const Vec3& min, const Vec3& max, const Vec3& velocity) {
+  addFluidBlock(FluidBlock{min, max, velocity});
+}
+
+void CoupledWorld::addFluidBlock(const FluidBlock& block) {
   if (sim_) throw std::logic_error("CoupledWorld::addFluidBlock after the first advance()");
-  blocks_.push_back({min, max, velocity});
+  blocks_.push_back(block);
 }
 
 std::size_t CoupledWorld::couple(btRigidBody* body, const BodyCoupling& coupling) {

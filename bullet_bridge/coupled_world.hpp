@@ -71,6 +71,8 @@ class CoupledWorld {
 
   /// A box of fluid on the lattice (spacing 2 particle radii). Before the first advance().
   void addFluidBlock(const Vec3& min, const Vec3& max, const Vec3& velocity = Vec3::Zero());
+  /// The same with every FluidBlock field (e.g. its own kinematic viscosity).
+  void addFluidBlock(const FluidBlock& block);
   /// Couples a body of the world with the fluid. Before the first advance().
   /// Returns its index in simulation().bodyStates().
   std::size_t couple(btRigidBody* body, const BodyCoupling& coupling = {});

@@ -47,7 +47,7 @@ SceneWorld::SceneWorld(const SimulationSettings& sim, const std::vector<BodySpec
   cs.domain = sim.domain;
   coupled_ = std::make_unique<CoupledWorld>(world, cs);
   for (const FluidBlock& b : sim.blocks)
-    coupled_->addFluidBlock(b.min, b.max, b.velocity);
+    coupled_->addFluidBlock(b);
 
   for (std::size_t k = 0; k < bodies.size(); ++k) {
     const BodySpec& spec = bodies[k];

@@ -32,8 +32,10 @@ TEST(SceneLoader, SmallDambreak) {
   EXPECT_DOUBLE_EQ(s.sim.fluid.rest_density, 1000.0);
   EXPECT_EQ(s.sim.fluid.speed_of_sound, 0.0);  // "auto"
   EXPECT_DOUBLE_EQ(s.sim.fluid.viscosity, 0.1);
+  EXPECT_DOUBLE_EQ(s.sim.fluid.kinematic_viscosity, 1e-6);  // water
   EXPECT_DOUBLE_EQ(s.sim.fluid.smoothing_ratio, 1.0);
   ASSERT_EQ(s.sim.blocks.size(), 1u);
+  EXPECT_DOUBLE_EQ(s.sim.blocks[0].kinematic_viscosity, 1e-6);  // the fluid's
   EXPECT_EQ(s.sim.blocks[0].min, Vec3(0, 0, 0));
   EXPECT_EQ(s.sim.blocks[0].max, Vec3(0.1, 0.2, 0.1));
   EXPECT_EQ(s.sim.method, CouplingMethod::Local);
@@ -346,6 +348,11 @@ const BadCase kBadCases[] = {
      "fluid.speed_of_sound: ", "\"auto\""},
     {"negative viscosity", [](json& s) { s["fluid"]["viscosity"] = -0.1; },
      "fluid.viscosity: ", ">= 0"},
+    {"negative kinematic viscosity", [](json& s) { s["fluid"]["kinematic_viscosity"] = -1e-6; },
+     "fluid.kinematic_viscosity: ", "in [0, 1]"},
+    {"block kinematic viscosity too large",
+     [](json& s) { s["fluid"]["blocks"][0]["kinematic_viscosity"] = 5; },
+     "fluid.blocks[0].kinematic_viscosity: ", "in [0, 1]"},
     {"no blocks", [](json& s) { s["fluid"]["blocks"] = json::array(); },
      "fluid.blocks: ", "at least one"},
     {"block below the lattice spacing",

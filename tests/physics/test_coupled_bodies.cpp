@@ -81,14 +81,17 @@ struct Floating {
 };
 
 /// A flat box (0.16 x 0.10 x 0.14 m) dropped from 1 cm above the surface of 15 cm of
-/// fluid, settled for `end` seconds.
-Floating floatBox(double density_ratio, CouplingMethod method, double end, double slip = 0.0) {
+/// fluid (or, `placed`, started at rest at its Archimedes draft: the fluid where it
+/// stands is left out), settled for `end` seconds.
+Floating floatBox(double density_ratio, CouplingMethod method, double end, double slip = 0.0,
+                  bool placed = false) {
   const Vec3 size(0.32, 0.30, 0.18), half(0.08, 0.05, 0.07);
   const double depth = 0.15;
   SimulationSettings sim = fluidBox(Vec3(size.x(), depth, size.z()), method);
+  const double y = placed ? depth - density_ratio * 2 * half.y() + half.y()
+                          : depth + half.y() + 0.01;
   std::vector<BodySpec> bodies = {
-      tank(size), box("box", half, density_ratio * 1000.0,
-                      Vec3(0.5 * size.x(), depth + half.y() + 0.01, 0.5 * size.z()))};
+      tank(size), box("box", half, density_ratio * 1000.0, Vec3(0.5 * size.x(), y, 0.5 * size.z()))};
   bodies[0].slip = bodies[1].slip = slip;
   SceneWorld world(sim, bodies);
   Floating out;
@@ -129,7 +132,7 @@ class Buoyancy : public ::testing::TestWithParam<std::tuple<double, CouplingMeth
 TEST_P(Buoyancy, FloatsFlatAtTheArchimedesDraft) {
   const auto [ratio, method] = GetParam();
   const Floating f = floatBox(ratio, method, 1.5);
-  EXPECT_NEAR(f.draft, ratio * 0.10, 0.10 * ratio * 0.10);
+  EXPECT_NEAR(f.draft, ratio * 0.10, 0.03 * ratio * 0.10);
   EXPECT_LT(f.tilt, 0.1);
   EXPECT_EQ(f.max_penetrating, 0u);
 }
@@ -143,6 +146,16 @@ INSTANTIATE_TEST_SUITE_P(Ratios, Buoyancy,
                            return std::string(name(std::get<1>(param.param))) + "_density_" +
                                   std::to_string(percent);
                          });
+
+TEST(Buoyancy, DraftDoesNotDependOnWhereTheBoxStarts) {
+  // Dropped from above the surface or placed at rest at its draft: the same draft.
+  for (CouplingMethod method : {CouplingMethod::Local, CouplingMethod::Global}) {
+    const Floating dropped = floatBox(0.5, method, 1.5);
+    const Floating placed = floatBox(0.5, method, 1.5, 0.0, /*placed=*/true);
+    EXPECT_NEAR(placed.draft, dropped.draft, 0.02 * dropped.draft) << name(method);
+    EXPECT_EQ(placed.max_penetrating, 0u);
+  }
+}
 
 TEST(Sinking, DenseBoxSinksToTheFloorAndStays) {
   // No-slip walls, water: the film under the box drains. The box comes to rest on the last
