@@ -147,16 +147,6 @@ INSTANTIATE_TEST_SUITE_P(Ratios, Buoyancy,
                                   std::to_string(percent);
                          });
 
-TEST(Buoyancy, DraftDoesNotDependOnWhereTheBoxStarts) {
-  // Dropped from above the surface or placed at rest at its draft: the same draft.
-  for (CouplingMethod method : {CouplingMethod::Local, CouplingMethod::Global}) {
-    const Floating dropped = floatBox(0.5, method, 1.5);
-    const Floating placed = floatBox(0.5, method, 1.5, 0.0, /*placed=*/true);
-    EXPECT_NEAR(placed.draft, dropped.draft, 0.02 * dropped.draft) << name(method);
-    EXPECT_EQ(placed.max_penetrating, 0u);
-  }
-}
-
 TEST(Sinking, DenseBoxSinksToTheFloorAndStays) {
   // No-slip walls, water: the film under the box drains. The box comes to rest on the last
   // layer of particles between it and the floor (a particle backed by the floor carries the
