@@ -273,8 +273,8 @@ double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, cons
       // radius).
       const double beyond = d.dot(set.normal[k]) - rb;
       const double beta = beyond > rb ? 1.0 + rb / beyond : 2.0;
-      const double w = -factor * two_nu * set.volume[k] * beta * d_sq *
-                       kernel_.derivativeOverR(r) / (d_sq + eps_sq);
+      const double w = -factor * two_nu * set.volume[k] * beta * d_sq * kernel_.derivativeOverR(r) /
+                       (d_sq + eps_sq);
       const Vec3 rel = u - omega.cross(set.position[k]);
       shear += w * rel;
       if (moment) *moment += w * set.position[k].cross(rel);

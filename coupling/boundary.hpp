@@ -36,7 +36,7 @@ struct BodySettings {
   /// eps in [0, 1]: the wall exerts (1 - eps) times the viscous shear stress of a no-slip
   /// wall (Boundaries::addWallTerms): 0 no-slip, 1 free slip. Independent of the step.
   double slip = 0.0;
-  double restitution = 0.0;              ///< delta in [0, 1]: 0 inelastic
+  double restitution = 0.0;  ///< delta in [0, 1]: 0 inelastic
 
   bool moves() const { return kind != BodyKind::Static; }
   /// True when the fluid's forces act on the body.
@@ -197,8 +197,8 @@ class Boundaries {
   /// addDensity and addWallTerms: shear and reaction may be null (density only).
   void wallPass(const Fluid& fluid, std::vector<double>& density, std::vector<Vec3>* shear,
                 std::vector<Wrench>* reaction) const;
-  double wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u,
-                  const Vec3& omega, Vec3& shear, Vec3* moment) const;
+  double wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u, const Vec3& omega,
+                  Vec3& shear, Vec3* moment) const;
 
   FluidParams fluid_;
   CubicSplineKernel kernel_;
@@ -206,7 +206,7 @@ class Boundaries {
   double spacing_, radius_;
   double volume_scale_;  ///< s^3 * sum of W over a flat sample lattice: V_k numerator
   std::vector<Body> bodies_;
-  std::vector<double> shear_factor_;  ///< (bodies) 1 - slip
+  std::vector<double> shear_factor_;          ///< (bodies) 1 - slip
   std::vector<std::uint32_t> static_bodies_;  ///< indices of the static bodies
   SampleSet static_;
   std::vector<MovingBody> moving_;

@@ -149,8 +149,9 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMetho
       // Local: each contact's normal impulse, then a few passes when there are several
       // (an impulse towards one body must not push the particle into another).
       Vec3 vi = v[i];
-      normalPasses(ch, &ch.records[first], count, vi, [](const Record&) { return Vec3::Zero(); },
-                   count > 1 ? 3 : 1);
+      normalPasses(
+          ch, &ch.records[first], count, vi, [](const Record&) { return Vec3::Zero(); },
+          count > 1 ? 3 : 1);
       v[i] = vi;
     }
   }
@@ -206,8 +207,8 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMetho
       // change at the contact, along the normal.
       Vec3 vi = v[i];
       for (std::size_t q = 0; q < count; ++q)
-        vi += ((rec[q].psi + rec[q].normal.dot(bodyChange(rec[q]))) / double(count)) *
-              rec[q].normal;
+        vi +=
+            ((rec[q].psi + rec[q].normal.dot(bodyChange(rec[q]))) / double(count)) * rec[q].normal;
       if (count > 1) normalPasses(ch, rec, count, vi, bodyChange, 2);
       v[i] = vi;
       k += count;
@@ -218,8 +219,7 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMetho
   return result;
 }
 
-void DirectForcing::supportBackedContacts(double dt,
-                                          const std::vector<Vec3>& v,
+void DirectForcing::supportBackedContacts(double dt, const std::vector<Vec3>& v,
                                           const std::vector<RigidPrediction>& predicted,
                                           const std::vector<std::uint8_t>& two_way,
                                           std::size_t chunk_count, std::vector<Wrench>& wrench) {

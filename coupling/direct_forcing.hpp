@@ -135,8 +135,8 @@ class DirectForcing {
 
   double particle_mass_;
   std::vector<Chunk> chunks_;
-  std::vector<Record> backed_;   ///< scratch: backed contacts, in particle order
-  std::vector<double> lambda_;   ///< scratch: their accumulated impulses (N s)
+  std::vector<Record> backed_;  ///< scratch: backed contacts, in particle order
+  std::vector<double> lambda_;  ///< scratch: their accumulated impulses (N s)
 };
 
 }  // namespace wake

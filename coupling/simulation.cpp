@@ -174,8 +174,8 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
   FluidState& st = fluid_->state();
   std::uint32_t next_id = 0;
   for (const FluidBlock& b : s.blocks) {
-    const double nu = b.kinematic_viscosity >= 0 ? b.kinematic_viscosity
-                                                  : s.fluid.kinematic_viscosity;
+    const double nu =
+        b.kinematic_viscosity >= 0 ? b.kinematic_viscosity : s.fluid.kinematic_viscosity;
     Eigen::Vector3i count;
     for (int k = 0; k < 3; ++k)
       count[k] = std::max(1, static_cast<int>(std::lround((b.max[k] - b.min[k]) / sp)));

@@ -149,7 +149,7 @@ class Simulation {
   std::vector<RigidState> body_now_, body_final_;  // scratch: body states at t and t + dt
   std::vector<RigidPrediction> body_pred_;         // scratch: predicted body states
   std::vector<Wrench> wrench_;
-  std::vector<Vec3> wall_shear_;      // scratch: (n) the walls' viscous shear, m/s^2
+  std::vector<Vec3> wall_shear_;       // scratch: (n) the walls' viscous shear, m/s^2
   std::vector<Wrench> wall_reaction_;  // scratch: (bodies) its reaction on two-way bodies
   std::size_t last_contacts_ = 0;
 };

@@ -314,7 +314,8 @@ void readFluid(const ObjectReader& fluid, SimulationSettings& sim) {
     b.min = box.min;
     b.max = box.max;
     b.velocity = block.vec3("velocity", Vec3::Zero());
-    b.kinematic_viscosity = block.number("kinematic_viscosity", p.kinematic_viscosity, kViscosityRange);
+    b.kinematic_viscosity =
+        block.number("kinematic_viscosity", p.kinematic_viscosity, kViscosityRange);
     sim.blocks.push_back(b);
     if (blockParticles(b, p.spacing()) < 1.0)
       block.where().fail("holds no particles: it is smaller than the lattice spacing " +

@@ -22,8 +22,8 @@ struct FluidParams {
   /// m^2/s, >= 0: physical (laminar) kinematic viscosity nu, Morris et al. 1997; water
   /// 1e-6. Per particle in FluidState::kinematic_viscosity; this is the fluid's default.
   double kinematic_viscosity = 1e-6;
-  double gamma = 7.0;             ///< Tait exponent, > 0
-  double smoothing_ratio = 1.0;   ///< smoothing length H / spacing, in [0.8, 2]
+  double gamma = 7.0;            ///< Tait exponent, > 0
+  double smoothing_ratio = 1.0;  ///< smoothing length H / spacing, in [0.8, 2]
 
   double spacing() const { return 2.0 * particle_radius; }
   double smoothingLength() const { return smoothing_ratio * spacing(); }
@@ -38,12 +38,12 @@ struct FluidParams {
 /// Changing state of the fluid: structure of arrays, all of length size(), kept in
 /// grid-cell order. `id` maps a slot to the particle's permanent number.
 struct FluidState {
-  std::vector<Vec3> position;      ///< (n) m
-  std::vector<Vec3> velocity;      ///< (n) m/s
-  std::vector<Vec3> acceleration;  ///< (n) m/s^2, fluid forces + gravity of this step
-  std::vector<double> density;     ///< (n) kg/m^3
-  std::vector<double> pressure;    ///< (n) Pa, >= 0
-  std::vector<std::uint32_t> id;   ///< (n) permanent particle number
+  std::vector<Vec3> position;               ///< (n) m
+  std::vector<Vec3> velocity;               ///< (n) m/s
+  std::vector<Vec3> acceleration;           ///< (n) m/s^2, fluid forces + gravity of this step
+  std::vector<double> density;              ///< (n) kg/m^3
+  std::vector<double> pressure;             ///< (n) Pa, >= 0
+  std::vector<std::uint32_t> id;            ///< (n) permanent particle number
   std::vector<double> kinematic_viscosity;  ///< (n) m^2/s, nu of the particle's fluid
 
   std::size_t size() const { return position.size(); }

@@ -23,10 +23,10 @@ TEST(DamBreakDemo, NoWaterHangsOnTheNoSlipWalls) {
   for (std::size_t i = 0; i < f.position.size(); ++i)
     if (f.velocity[i].norm() < 0.05 && f.position[i].y() > 0.12) ++hanging;
   const double share = double(hanging) / double(f.position.size());
-  std::printf("[ dam break ] t %.2f s: %zu of %zu particles at rest above 0.12 m (%.2f%%), "
-              "lost %d\n",
-              f.time, hanging, f.position.size(), 100 * share,
-              out.summary()["lost_particles"].get<int>());
+  std::printf(
+      "[ dam break ] t %.2f s: %zu of %zu particles at rest above 0.12 m (%.2f%%), "
+      "lost %d\n",
+      f.time, hanging, f.position.size(), 100 * share, out.summary()["lost_particles"].get<int>());
   EXPECT_LT(share, 0.005);
   EXPECT_EQ(out.summary()["lost_particles"].get<int>(), 0);
   EXPECT_EQ(out.summary()["max_penetrating"].get<int>(), 0);
