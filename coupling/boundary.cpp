@@ -230,18 +230,6 @@ void Boundaries::worldSamples(std::vector<Vec3>& position, std::vector<Vec3>& no
   }
 }
 
-double Boundaries::densitySum(const SampleSet& set, const Vec3& p) const {
-  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
-  double sum = 0.0;
-  set.grid.forEachRangeWithin(p, set.density_reach, [&](std::uint32_t lo, std::uint32_t hi) {
-    for (std::uint32_t k = lo; k < hi; ++k) {
-      const double d_sq = (p - set.position[k]).squaredNorm();
-      if (d_sq < support_sq) sum += set.volume[k] * kernel_.value(std::sqrt(d_sq));
-    }
-  });
-  return sum;
-}
-
 void Boundaries::addDensity(const Fluid& fluid, std::vector<double>& density) const {
   wallPass(fluid, density, nullptr, nullptr);
 }
@@ -266,6 +254,7 @@ double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, cons
       if (d_sq >= support_sq) continue;
       const double r = std::sqrt(d_sq);
       sum += set.volume[k] * kernel_.value(r);
+      if (!(nu > 0.0)) continue;
       const double factor = shear_factor_[set.body[k]];
       if (factor <= 0.0) continue;
       // Morris's ghost velocity: the sample lies rb behind the surface, the particle
@@ -292,7 +281,11 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
   const bool has_static = !static_.position.empty();
   const std::size_t n = x.size(), nb = bodies_.size();
   const bool with_shear = shear && any_shear_;
-  if (shear) shear->assign(n, Vec3::Zero());
+  // Without shear (every wall free-slip, or density only) `shear` is left empty.
+  if (shear) {
+    shear->clear();
+    if (with_shear) shear->resize(n);
+  }
   if (reaction) reaction->assign(nb, Wrench{});
   bool two_way = false;
   for (const MovingBody& m : moving_)
@@ -309,13 +302,9 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
       double sum = 0.0;
       Vec3 a = Vec3::Zero();
       if (has_static && (static_.near[static_.grid.cellIndex(xi)] & kNearDensity)) {
-        if (nu > 0.0) {
-          Vec3 s = Vec3::Zero();
-          sum += wallSums(static_, xi, nu, vi, zero, s, nullptr);
-          a -= s;
-        } else {
-          sum += densitySum(static_, xi);
-        }
+        Vec3 s = Vec3::Zero();
+        sum += wallSums(static_, xi, nu, vi, zero, s, nullptr);
+        a -= s;
       }
       if (moving_reach_.contains(xi)) {
         for (const MovingBody& m : moving_) {
@@ -324,11 +313,7 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
           const Mat3 rt = b.rotation.transpose();
           const Vec3 p = rt * (xi - b.settings.pose.position);
           if (!m.samples.reach_box.contains(p)) continue;
-          if (!(nu > 0.0)) {
-            sum += densitySum(m.samples, p);
-            continue;
-          }
-          const bool react = b.settings.twoWay();
+          const bool react = nu > 0.0 && b.settings.twoWay();
           Vec3 s = Vec3::Zero(), moment = Vec3::Zero();
           sum += wallSums(m.samples, p, nu, rt * (vi - b.settings.linear_velocity),
                           rt * b.settings.angular_velocity, s, react ? &moment : nullptr);

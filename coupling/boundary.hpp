@@ -87,7 +87,8 @@ class Boundaries {
   /// support of each fluid particle (positions and velocities now, bodies at their states
   /// now):
   /// - `density` (n): adds the boundary's share, as addDensity();
-  /// - `shear` (n, m/s^2): the walls' viscous shear, written. The samples take part in
+  /// - `shear` (n, m/s^2): the walls' viscous shear, written (left empty when no wall
+  ///   exerts any: all free slip, or an inviscid fluid). The samples take part in
   ///   the fluid's laminar viscosity (Morris et al. 1997) as a layer of fluid moving with
   ///   the wall: a_a = -sum_k (1 - eps_k) 2 nu_a V_k beta_ak (-x_ak . grad W_ak) /
   ///   (|x_ak|^2 + 0.01 H^2) (v_a - v_k). beta_ak = min(2, 1 + r / d_a) (Morris's
@@ -187,13 +188,11 @@ class Boundaries {
   /// Contact point and normal of a fluid centre x from the body's exact shape (its
   /// distance already in ct). False when neither the shape nor a sample gives a normal.
   bool contactGeometry(const Vec3& x, Contact& ct) const;
-  /// Boundary density sum sum_k V_k W(p - x_k) over `set` (p in the set's space).
-  double densitySum(const SampleSet& set, const Vec3& p) const;
-  /// Shear sums of one set at p (set space) for a fluid particle of viscosity nu whose
-  /// velocity relative to the set's frame is u (the set turns with omega, set space):
-  /// adds sum_k w_k (u - omega x x_k) to `shear` and, when `moment` is given,
-  /// sum_k w_k x_k x (u - omega x x_k) to it (w_k of addWallTerms, 1/s). Returns the
-  /// density sum sum_k V_k W.
+  /// The sums of one set at p (set space) for a fluid particle of viscosity nu whose
+  /// velocity relative to the set's frame is u (the set turns with omega, set space).
+  /// Returns the density sum sum_k V_k W(p - x_k). When nu > 0 it also adds
+  /// sum_k w_k (u - omega x x_k) to `shear` and, when `moment` is given,
+  /// sum_k w_k x_k x (u - omega x x_k) to it (w_k of addWallTerms, 1/s).
   /// addDensity and addWallTerms: shear and reaction may be null (density only).
   void wallPass(const Fluid& fluid, std::vector<double>& density, std::vector<Vec3>* shear,
                 std::vector<Wrench>* reaction) const;

@@ -20,10 +20,10 @@ Mat3 contactMatrix(double particle_mass, double body_inverse_mass, const Mat3& i
   return (1.0 / particle_mass + body_inverse_mass) * Mat3::Identity() - r * inverse_inertia * r;
 }
 
-Vec3 localImpulse(double particle_mass, double body_inverse_mass, const Mat3& inverse_inertia,
-                  const Vec3& lever, const Vec3& psi) {
-  const Mat3 k = contactMatrix(particle_mass, body_inverse_mass, inverse_inertia, lever);
-  return k.ldlt().solve(psi);
+double normalCompliance(double particle_inverse_mass, double body_inverse_mass,
+                        const Mat3& inverse_inertia, const Vec3& lever, const Vec3& normal) {
+  const Vec3 rn = lever.cross(normal);
+  return particle_inverse_mass + body_inverse_mass + rn.dot(inverse_inertia * rn);
 }
 
 void GlobalSystem::add(const GlobalContact& c) {
@@ -74,8 +74,8 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMetho
   auto normalMass = [&](const Record& rec) {
     if (!two_way[rec.body]) return m;
     const RigidPrediction& p = predicted[rec.body];
-    const Mat3 k = contactMatrix(m, p.inverse_mass, p.inverse_inertia_world, rec.lever);
-    return 1.0 / rec.normal.dot(k * rec.normal);
+    return 1.0 / normalCompliance(1.0 / m, p.inverse_mass, p.inverse_inertia_world, rec.lever,
+                                  rec.normal);
   };
   auto applyImpulse = [&](Chunk& ch, const Record& rec, const Vec3& j, Vec3& vi) {
     vi += j / m;
@@ -264,7 +264,7 @@ void DirectForcing::supportBackedContacts(double dt, const std::vector<Vec3>& v,
         const Vec3 v_body = rec.v_cp + dV + dW.cross(rec.lever);
         const double vn = (v[rec.particle] - v_body).dot(rec.normal);
         const Vec3 rn = rec.lever.cross(rec.normal);
-        const double k = p.inverse_mass + rn.dot(inv_i * rn);  // n^T K_body n
+        const double k = normalCompliance(0.0, p.inverse_mass, inv_i, rec.lever, rec.normal);
         const double j = std::max(-lambda_[c], (rec.bounce - vn) / k);
         if (j == 0.0) continue;
         lambda_[c] += j;

@@ -38,10 +38,11 @@ Mat3 crossMatrix(const Vec3& r);
 Mat3 contactMatrix(double particle_mass, double body_inverse_mass, const Mat3& inverse_inertia,
                    const Vec3& lever);
 
-/// Local approach: impulse J (N s) on the particle that changes the relative velocity at
-/// the contact by exactly psi; the body receives -J at the lever.
-Vec3 localImpulse(double particle_mass, double body_inverse_mass, const Mat3& inverse_inertia,
-                  const Vec3& lever, const Vec3& psi);
+/// n^T K n without forming K: the change of the normal relative velocity at a contact per
+/// unit impulse along its normal n, 1/m_i + 1/m_c + (r x n) . I^-1 (r x n) (1/kg).
+/// particle_inverse_mass 0: a particle that cannot give way (backed by a wall).
+double normalCompliance(double particle_inverse_mass, double body_inverse_mass,
+                        const Mat3& inverse_inertia, const Vec3& lever, const Vec3& normal);
 
 /// One contact of the global system: the particle's mass share, lever, normal and the
 /// normal velocity change it needs.

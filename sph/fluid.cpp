@@ -164,7 +164,6 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
   // nu = 2 alpha H c / (rho_a + rho_b): the numerator is constant.
   const double visc = 2.0 * params_.viscosity * h * params_.speed_of_sound;
   const double m = mass_;
-  const bool laminar = maxKinematicViscosity() > 0.0;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
     const Vec3 xi = x[i], vi = v[i];
@@ -182,8 +181,7 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
       if (vx < 0.0) coeff += -visc / (rho_i + rho[j]) * vx / (r_sq + eps_sq);
       acc -= (m * coeff * dwr) * xij;
       // Morris: x . grad W = r^2 dW/dr / r (< 0), so v_a is drawn towards v_b.
-      if (laminar)
-        lap += ((nu_i / rho[j] + nu[j] * inv_rho_i) * r_sq * dwr / (r_sq + eps_sq)) * vij;
+      lap += ((nu_i / rho[j] + nu[j] * inv_rho_i) * r_sq * dwr / (r_sq + eps_sq)) * vij;
     }
     acc += m * lap + gravity;
     if (add) acc += add[i];

@@ -25,24 +25,28 @@ Vec3 randomVec(std::mt19937& rng, double scale) {
   return Vec3(u(rng), u(rng), u(rng));
 }
 
-TEST(LocalApproach, OneContactEndsExactlyOnItsTargetForAnyMasses) {
+TEST(LocalApproach, OneContactEndsExactlyOnItsNormalTargetForAnyMasses) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> mass(1e-4, 10.0);
   for (int trial = 0; trial < 200; ++trial) {
     const double m_i = mass(rng), m_c = mass(rng);
     const Mat3 inv_inertia = randomInverseInertia(rng);
-    const Vec3 r = randomVec(rng, 0.5), psi = randomVec(rng, 2.0);
-    const Vec3 j = localImpulse(m_i, 1.0 / m_c, inv_inertia, r, psi);
-    // The particle gets j, the body -j at the lever.
-    const Vec3 dv_particle = j / m_i;
-    const Vec3 dV = -j / m_c;
-    const Vec3 dW = inv_inertia * r.cross(-j);
+    const Vec3 r = randomVec(rng, 0.5), n = randomVec(rng, 1.0).normalized();
+    const double psi = randomVec(rng, 2.0).x();
+    // The impulse j n that changes the normal relative velocity by psi.
+    const double j = psi / normalCompliance(1.0 / m_i, 1.0 / m_c, inv_inertia, r, n);
+    // The particle gets j n, the body -j n at the lever.
+    const Vec3 dv_particle = j * n / m_i;
+    const Vec3 dV = -j * n / m_c;
+    const Vec3 dW = inv_inertia * r.cross(-j * n);
     const Vec3 dv_contact = dV + dW.cross(r);
-    EXPECT_LT((dv_particle - dv_contact - psi).norm(), 1e-9 * (1 + psi.norm())) << trial;
+    EXPECT_NEAR((dv_particle - dv_contact).dot(n), psi, 1e-9 * (1 + std::abs(psi))) << trial;
     // Linear momentum: what the particle gains the body loses.
-    EXPECT_LT((m_i * dv_particle + m_c * dV).norm(), 1e-12 * (1 + j.norm()));
-    // K is symmetric positive definite.
+    EXPECT_LT((m_i * dv_particle + m_c * dV).norm(), 1e-12 * (1 + std::abs(j)));
+    // The compliance is n^T K n, and K is symmetric positive definite.
     const Mat3 k = contactMatrix(m_i, 1.0 / m_c, inv_inertia, r);
+    EXPECT_NEAR(normalCompliance(1.0 / m_i, 1.0 / m_c, inv_inertia, r, n), n.dot(k * n),
+                1e-9 * k.norm());
     EXPECT_LT((k - k.transpose()).norm(), 1e-12 * k.norm());
     EXPECT_GT(Eigen::SelfAdjointEigenSolver<Mat3>(k).eigenvalues().minCoeff(), 0.0);
   }
