@@ -154,8 +154,9 @@ TEST(Sinking, DenseBoxSinksToTheFloorAndStays) {
   // layers (2 r each); at 3000 kg/m^3 on one: its lowest point one particle diameter
   // (2 r) above the floor.
   for (const double ratio : {2.0, 3.0}) {
-    for (CouplingMethod method : {CouplingMethod::Local, CouplingMethod::Global}) {
-      if (ratio == 3.0 && method == CouplingMethod::Local) continue;  // CI time
+    // One method per density (CI time): both were measured with both.
+    const CouplingMethod method = ratio == 2.0 ? CouplingMethod::Global : CouplingMethod::Local;
+    {
       const Floating f = floatBox(ratio, method, 1.5);
       std::printf("[ sinking ] %s density ratio %.1f: lowest point %.4f m, speed %.4f m/s\n",
                   name(method), ratio, f.lowest, f.speed);
