@@ -134,6 +134,7 @@ void Fluid::computePressure() {
   const double gamma = params_.gamma;
   const bool gamma7 = gamma == 7.0;
   p_over_rho_sq_.resize(state_.size());
+  inv_rho_.resize(state_.size());
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
     const double ratio = state_.density[i] * inv_rho0;
@@ -146,7 +147,9 @@ void Fluid::computePressure() {
     }
     const double p = std::max(0.0, tait_b_ * (pw - 1.0));
     state_.pressure[i] = p;
-    p_over_rho_sq_[i] = p / (state_.density[i] * state_.density[i]);
+    const double inv_rho = 1.0 / state_.density[i];
+    inv_rho_[i] = inv_rho;
+    p_over_rho_sq_[i] = p * inv_rho * inv_rho;
   }
 }
 
@@ -155,6 +158,7 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
   const Vec3* x = state_.position.data();
   const Vec3* v = state_.velocity.data();
   const double* rho = state_.density.data();
+  const double* inv_rho = inv_rho_.data();
   const double* nu = state_.kinematic_viscosity.data();
   const double* pr2 = p_over_rho_sq_.data();
   const std::uint32_t* nb = neighbors_.index.data();
@@ -167,7 +171,7 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
     const Vec3 xi = x[i], vi = v[i];
-    const double rho_i = rho[i], inv_rho_i = 1.0 / rho_i, nu_i = nu[i];
+    const double rho_i = rho[i], inv_rho_i = inv_rho[i], nu_i = nu[i];
     const double pi_term = pr2[i];
     Vec3 acc = Vec3::Zero(), lap = Vec3::Zero();
     for (std::uint64_t k = neighbors_.offset[i], e = neighbors_.offset[i + 1]; k < e; ++k) {
@@ -176,12 +180,13 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
       const Vec3 vij = vi - v[j];
       const double r_sq = xij.squaredNorm();
       const double dwr = kernel_.derivativeOverR(std::sqrt(r_sq));
+      const double inv_d = 1.0 / (r_sq + eps_sq);
       double coeff = pi_term + pr2[j];
       const double vx = vij.dot(xij);
-      if (vx < 0.0) coeff += -visc / (rho_i + rho[j]) * vx / (r_sq + eps_sq);
+      if (vx < 0.0) coeff += -visc / (rho_i + rho[j]) * vx * inv_d;
       acc -= (m * coeff * dwr) * xij;
       // Morris: x . grad W = r^2 dW/dr / r (< 0), so v_a is drawn towards v_b.
-      lap += ((nu_i / rho[j] + nu[j] * inv_rho_i) * r_sq * dwr / (r_sq + eps_sq)) * vij;
+      lap += ((nu_i * inv_rho[j] + nu[j] * inv_rho_i) * r_sq * dwr * inv_d) * vij;
     }
     acc += m * lap + gravity;
     if (add) acc += add[i];

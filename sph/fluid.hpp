@@ -105,6 +105,7 @@ class Fluid {
   NeighborList neighbors_;
   std::vector<std::uint32_t> order_;   ///< (n) scratch: cell-sort permutation
   std::vector<double> p_over_rho_sq_;  ///< (n) P / rho^2 (m^5 / (kg s^2)), this step
+  std::vector<double> inv_rho_;        ///< (n) 1 / rho (m^3/kg), this step
 };
 
 }  // namespace wake
