@@ -8,18 +8,6 @@
 
 namespace wake {
 
-Mat3 crossMatrix(const Vec3& r) {
-  Mat3 m;
-  m << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
-  return m;
-}
-
-Mat3 contactMatrix(double particle_mass, double body_inverse_mass, const Mat3& inverse_inertia,
-                   const Vec3& lever) {
-  const Mat3 r = crossMatrix(lever);
-  return (1.0 / particle_mass + body_inverse_mass) * Mat3::Identity() - r * inverse_inertia * r;
-}
-
 double normalCompliance(double particle_inverse_mass, double body_inverse_mass,
                         const Mat3& inverse_inertia, const Vec3& lever, const Vec3& normal) {
   const Vec3 rn = lever.cross(normal);

@@ -29,17 +29,10 @@ enum class CouplingMethod { Local, Global, Penalty };
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 
-/// Cross-product matrix [r]x: [r]x a = r x a.
-Mat3 crossMatrix(const Vec3& r);
-
-/// Effective-mass matrix of one contact: the change of the relative velocity at the
-/// contact per unit impulse on the particle (and its reaction on the body),
-/// K = (1/m_i + 1/m_c) E - [r]x I^-1 [r]x. Symmetric positive definite for m_i > 0.
-Mat3 contactMatrix(double particle_mass, double body_inverse_mass, const Mat3& inverse_inertia,
-                   const Vec3& lever);
-
-/// n^T K n without forming K: the change of the normal relative velocity at a contact per
-/// unit impulse along its normal n, 1/m_i + 1/m_c + (r x n) . I^-1 (r x n) (1/kg).
+/// The change of the normal relative velocity at a contact per unit impulse along its
+/// normal n on the particle (and its reaction on the body at lever r): n^T K n with
+/// K = (1/m_i + 1/m_c) E - [r]x I^-1 [r]x, i.e. 1/m_i + 1/m_c + (r x n) . I^-1 (r x n)
+/// (1/kg).
 /// particle_inverse_mass 0: a particle that cannot give way (backed by a wall).
 double normalCompliance(double particle_inverse_mass, double body_inverse_mass,
                         const Mat3& inverse_inertia, const Vec3& lever, const Vec3& normal);

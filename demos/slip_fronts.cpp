@@ -4,15 +4,14 @@
 //
 // Runs SCENE (demos/scenes/slip_ramp.json or one like it: static bodies named ramp_*,
 // tilted boxes whose own +x points downhill, each with a lane of fluid 12 cm wide around
-// its centre's z) and prints, per output frame, how far each ramp's front has travelled
-// downhill (m): the 90th percentile of the ramp-frame x of the lane's particles on the
-// ramp, from where it starts, as the scene test measures it. MAX_DT (s, > 0) overrides time.max_dt.
-// Prints CSV on stdout (time, then one column per ramp, named by its slip) and, on stderr, the
-// steps taken and their mean length.
+// its centre's z) and prints, per output frame, how far each ramp's front (slipFront, as
+// the scene test measures it) has travelled downhill from where it starts (m). MAX_DT
+// (s, > 0) overrides time.max_dt. Prints CSV on stdout (time, then one column per ramp,
+// named by its slip) and, on stderr, the steps taken and their mean length.
 #include "bullet_bridge/scene_world.hpp"
+#include "demos/slip_front.hpp"
 #include "io/scene.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -27,18 +26,6 @@ struct Lane {
   double slip = 0;
   wake::Pose pose;
 };
-
-double front(const wake::FluidState& st, const Lane& lane) {
-  std::vector<double> downhill;
-  for (const wake::Vec3& x : st.position) {
-    if (std::abs(x.z() - lane.pose.position.z()) > 0.06) continue;
-    const wake::Vec3 p = lane.pose.toBody(x);
-    if (p.y() > 0.0 && p.y() < 0.08 && std::abs(p.x()) < 0.5) downhill.push_back(p.x());
-  }
-  if (downhill.empty()) return 0.0;
-  std::sort(downhill.begin(), downhill.end());
-  return downhill[downhill.size() * 9 / 10];
-}
 
 }  // namespace
 
@@ -70,7 +57,7 @@ int main(int argc, char** argv) {
     world.coupled().start();
     std::vector<double> start;
     for (const Lane& lane : lanes)
-      start.push_back(front(world.simulation().fluid().state(), lane));
+      start.push_back(wake::slipFront(world.simulation().fluid().state().position, lane.pose));
     std::printf("time");
     for (const Lane& lane : lanes)
       std::printf(",slip_%g", lane.slip);
@@ -84,7 +71,7 @@ int main(int argc, char** argv) {
       const wake::FluidState& st = world.simulation().fluid().state();
       std::printf("%.4f", world.simulation().time());
       for (std::size_t l = 0; l < lanes.size(); ++l)
-        std::printf(",%.5f", front(st, lanes[l]) - start[l]);
+        std::printf(",%.5f", wake::slipFront(st.position, lanes[l].pose) - start[l]);
       std::printf("\n");
     }
     const wake::Simulation& sim = world.simulation();

@@ -20,6 +20,16 @@ Mat3 randomInverseInertia(std::mt19937& rng) {
   return r * Vec3(u(rng), u(rng), u(rng)).asDiagonal() * r.transpose();
 }
 
+/// The contact's effective-mass matrix K = (1/m_i + 1/m_c) E - [r]x I^-1 [r]x (the change
+/// of the relative velocity per unit impulse), formed in full: normalCompliance's
+/// reference.
+Mat3 contactMatrix(double particle_mass, double body_inverse_mass, const Mat3& inverse_inertia,
+                   const Vec3& lever) {
+  Mat3 r;
+  r << 0, -lever.z(), lever.y(), lever.z(), 0, -lever.x(), -lever.y(), lever.x(), 0;
+  return (1.0 / particle_mass + body_inverse_mass) * Mat3::Identity() - r * inverse_inertia * r;
+}
+
 Vec3 randomVec(std::mt19937& rng, double scale) {
   std::uniform_real_distribution<double> u(-scale, scale);
   return Vec3(u(rng), u(rng), u(rng));

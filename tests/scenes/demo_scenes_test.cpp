@@ -40,8 +40,8 @@ TEST(DamBreakDemo, NoWaterHangsOnTheNoSlipWalls) {
     const double share = double(hanging) / double(f.position.size());
     if (share > worst) worst = share, worst_time = f.time;
   }
-  // The snapshot figure, for the record: at rest above 0.12 m at the end (a
-  // returning wave's crest on the back wall can stop there at that instant).
+  // The snapshot figure, printed only: at rest above 0.12 m at the end (a returning
+  // wave's crest on an end wall can stop there at that instant).
   const Frame last = out.frame(out.frames() - 1);
   std::size_t at_rest = 0;
   for (std::size_t i = 0; i < last.position.size(); ++i)

@@ -3,6 +3,8 @@
 // runs every scene first, as the test scene_<name>).
 #include "scene_output.hpp"
 
+#include "demos/slip_front.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -113,18 +115,11 @@ TEST(SlipRamp, FrontTravelsFurtherWithMoreSlip) {
   double front[3];
   for (int lane = 0; lane < 3; ++lane) {
     const Pose& ramp = out.body(lanes[lane]).pose[0];
-    // The front: 90th percentile of the downhill coordinate (the ramp's own x) of the
-    // lane's particles on the ramp (a percentile, so that one stray particle is not it).
     auto frontOf = [&](const Frame& fr) {
-      std::vector<double> downhill;
-      for (const Vec3& x : fr.position) {
-        if (std::abs(x.z() - ramp.position.z()) > 0.06) continue;  // lanes are 12 cm wide
-        const Vec3 p = ramp.toBody(x);
-        if (p.y() > 0.0 && p.y() < 0.08 && std::abs(p.x()) < 0.5) downhill.push_back(p.x());
-      }
-      EXPECT_GT(downhill.size(), 50u) << lanes[lane];
-      std::sort(downhill.begin(), downhill.end());
-      return downhill.empty() ? 0.0 : downhill[downhill.size() * 9 / 10];
+      std::size_t on_ramp = 0;
+      const double x = slipFront(fr.position, ramp, &on_ramp);
+      EXPECT_GT(on_ramp, 50u) << lanes[lane];
+      return x;
     };
     front[lane] = frontOf(f) - frontOf(f0);
     std::printf("[ slip ramp ] %s (eps %.1f): front moved %.4f m in %.2f s\n", lanes[lane],
