@@ -240,7 +240,8 @@ void Boundaries::addWallTerms(const Fluid& fluid, std::vector<double>& density,
 }
 
 double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u,
-                            const Vec3& omega, Vec3& shear, Vec3* moment) const {
+                            const Vec3& omega, Vec3& shear, Vec3* moment,
+                            PressureSums* pressure) const {
   const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
   const double h = kernel_.smoothingLength();
   const double eps_sq = 0.01 * h * h;
@@ -254,6 +255,14 @@ double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, cons
       if (d_sq >= support_sq) continue;
       const double r = std::sqrt(d_sq);
       sum += set.volume[k] * kernel_.value(r);
+      if (pressure) {
+        const Vec3 g = (set.volume[k] * kernel_.derivativeOverR(r)) * d;
+        const Vec3 gs = (set.p_rho2.empty() ? 0.0 : set.p_rho2[k]) * g;
+        pressure->grad += g;
+        pressure->scaled += gs;
+        pressure->grad_moment += set.position[k].cross(g);
+        pressure->scaled_moment += set.position[k].cross(gs);
+      }
       if (!(nu > 0.0)) continue;
       const double factor = shear_factor_[set.body[k]];
       if (factor <= 0.0) continue;
@@ -292,10 +301,18 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
     two_way = two_way || (with_shear && bodies_[m.body].settings.twoWay());
   const std::size_t chunks = (n + kChunk - 1) / kChunk;
   if (two_way) chunk_reaction_.assign(chunks * nb, Wrench{});
+  // The pressure sums ride along when the wall terms are asked for (addWallPressure).
+  const bool with_pressure = reaction != nullptr;
+  if (with_pressure) {
+    pressure_grad_.assign(n, Vec3::Zero());
+    pressure_scaled_.assign(n, Vec3::Zero());
+    chunk_pressure_.resize(chunks);
+  }
   const Vec3 zero = Vec3::Zero();
 #pragma omp parallel for schedule(static)
   for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
     const std::size_t end = std::min(n, (c + 1) * kChunk);
+    if (with_pressure) chunk_pressure_[c].clear();
     for (std::size_t i = c * kChunk; i < end; ++i) {
       const Vec3 xi = x[i], vi = st.velocity[i];
       const double nu = with_shear ? st.kinematic_viscosity[i] : 0.0;
@@ -303,8 +320,13 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
       Vec3 a = Vec3::Zero();
       if (has_static && (static_.near[static_.grid.cellIndex(xi)] & kNearDensity)) {
         Vec3 s = Vec3::Zero();
-        sum += wallSums(static_, xi, nu, vi, zero, s, nullptr);
+        PressureSums ps;
+        sum += wallSums(static_, xi, nu, vi, zero, s, nullptr, with_pressure ? &ps : nullptr);
         a -= s;
+        if (with_pressure) {
+          pressure_grad_[i] += ps.grad;
+          pressure_scaled_[i] += ps.scaled;
+        }
       }
       if (moving_reach_.contains(xi)) {
         for (const MovingBody& m : moving_) {
@@ -315,8 +337,20 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
           if (!m.samples.reach_box.contains(p)) continue;
           const bool react = nu > 0.0 && b.settings.twoWay();
           Vec3 s = Vec3::Zero(), moment = Vec3::Zero();
+          PressureSums ps;
           sum += wallSums(m.samples, p, nu, rt * (vi - b.settings.linear_velocity),
-                          rt * b.settings.angular_velocity, s, react ? &moment : nullptr);
+                          rt * b.settings.angular_velocity, s, react ? &moment : nullptr,
+                          with_pressure ? &ps : nullptr);
+          if (with_pressure && ps.grad.squaredNorm() > 0.0) {
+            const Mat3& rot = b.rotation;
+            pressure_grad_[i] += rot * ps.grad;
+            pressure_scaled_[i] += rot * ps.scaled;
+            if (b.settings.twoWay()) {
+              PressureSums world{rot * ps.grad, rot * ps.scaled, rot * ps.grad_moment,
+                                 rot * ps.scaled_moment};
+              chunk_pressure_[c].push_back({static_cast<std::uint32_t>(i), m.body, world});
+            }
+          }
           const Vec3 force = b.rotation * s;  // per unit fluid mass, on the body
           a -= force;
           if (react) {
@@ -336,6 +370,97 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
       (*reaction)[b].force += chunk_reaction_[c * nb + b].force;
       (*reaction)[b].torque += chunk_reaction_[c * nb + b].torque;
     }
+}
+
+void Boundaries::addWallPressure(const FluidState& st, std::vector<Vec3>& extra,
+                                 std::vector<Wrench>& reaction) const {
+  const std::size_t n = st.size();
+  if (pressure_grad_.size() != n || n == 0) return;
+  if (extra.empty()) extra.assign(n, Vec3::Zero());
+  const double rho0 = fluid_.rest_density;
+  const double mass = fluid_.particleMass();
+  const std::int64_t count = static_cast<std::int64_t>(n);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < count; ++i) {
+    const double pr2 = st.pressure[i] / (st.density[i] * st.density[i]);
+    extra[i] -= rho0 * (pr2 * pressure_grad_[i] + pressure_scaled_[i]);
+  }
+  // Fixed order (chunks, then particles): the same bits on any number of threads.
+  for (const std::vector<BodyPressure>& list : chunk_pressure_)
+    for (const BodyPressure& e : list) {
+      const double pr2 =
+          st.pressure[e.particle] / (st.density[e.particle] * st.density[e.particle]);
+      const double f = mass * rho0;
+      reaction[e.body].force += f * (pr2 * e.sums.grad + e.sums.scaled);
+      reaction[e.body].torque += f * (pr2 * e.sums.grad_moment + e.sums.scaled_moment);
+    }
+}
+
+void Boundaries::computeWallShare(SampleSet& set, bool body_space) const {
+  const std::size_t n = set.position.size();
+  set.wall_share.assign(n, 0.0);
+  const double sp = spacing_, s3 = sp * sp * sp;
+  const int reach = static_cast<int>(std::ceil(kernel_.supportRadius() / sp));
+  for (std::size_t k = 0; k < n; ++k) {
+    const Body& b = bodies_[set.body[k]];
+    const Vec3 nk = set.normal[k];
+    const Vec3 t1 = (std::abs(nk.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(nk).normalized();
+    const Vec3 t2 = nk.cross(t1);
+    double fluid = 0.0;
+    for (int i = -reach; i <= reach; ++i)
+      for (int j = -reach; j <= reach; ++j)
+        for (int l = -reach; l <= reach; ++l) {
+          const Vec3 off = sp * (i * t1 + j * t2 + l * nk);
+          const double w = kernel_.value(off.norm());
+          if (w <= 0.0) continue;
+          Vec3 p = set.position[k] + off;
+          if (!body_space) p = b.rotation.transpose() * (p - b.settings.pose.position);
+          if (b.settings.shape->signedDistance(p) >= (1.0 - 1e-6) * radius_) fluid += w;
+        }
+    set.wall_share[k] = 1.0 - s3 * fluid;
+  }
+}
+
+void Boundaries::computeSamplePressure(const Fluid& fluid) {
+  if (static_.wall_share.size() != static_.position.size()) computeWallShare(static_, false);
+  for (MovingBody& m : moving_)
+    if (m.samples.wall_share.size() != m.samples.position.size()) computeWallShare(m.samples, true);
+  samplePressure(fluid, static_, Mat3::Identity(), Vec3::Zero());
+  for (MovingBody& m : moving_) {
+    const Body& b = bodies_[m.body];
+    samplePressure(fluid, m.samples, b.rotation, b.settings.pose.position);
+  }
+}
+
+void Boundaries::samplePressure(const Fluid& fluid, SampleSet& set, const Mat3& rotation,
+                                const Vec3& origin) const {
+  const std::size_t n = set.position.size();
+  set.p_rho2.assign(n, 0.0);
+  const FluidState& st = fluid.state();
+  if (st.size() == 0 || n == 0) return;
+  const UniformGrid& grid = fluid.grid();
+  const double m = fluid.particleMass();
+  const double rho0 = fluid_.rest_density;
+  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
+  const double tait_b = rho0 * fluid_.speed_of_sound * fluid_.speed_of_sound / fluid_.gamma;
+  const Aabb reach = grown(fluid.particleBounds(), kernel_.supportRadius());
+  const std::int64_t count = static_cast<std::int64_t>(n);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t k = 0; k < count; ++k) {
+    const Vec3 xk = rotation * set.position[k] + origin;
+    if (!reach.contains(xk)) continue;
+    double sum = 0.0;
+    grid.forEachNeighborRange(xk, [&](std::uint32_t lo, std::uint32_t hi) {
+      for (std::uint32_t a = lo; a < hi; ++a) {
+        const double d_sq = (xk - st.position[a]).squaredNorm();
+        if (d_sq < support_sq) sum += kernel_.value(std::sqrt(d_sq));
+      }
+    });
+    if (sum == 0.0) continue;  // no fluid near: no pressure
+    const double rho = m * sum + rho0 * set.wall_share[k];
+    const double p = std::max(0.0, tait_b * (std::pow(rho / rho0, fluid_.gamma) - 1.0));
+    set.p_rho2[k] = p / (rho * rho);
+  }
 }
 
 template <class F>

@@ -102,6 +102,28 @@ class Boundaries {
   void addWallTerms(const Fluid& fluid, std::vector<double>& density, std::vector<Vec3>& shear,
                     std::vector<Wrench>& reaction) const;
 
+  /// Each sample's density and Tait pressure, the samples standing for fluid particles
+  /// that move with their wall: rho_k = sum_a m W(x_k - x_a) + rho0 (1 - F_k), where F_k
+  /// is the share of a full fluid lattice's kernel sum that fluid could give at x_k: the
+  /// points of a lattice aligned with the sample's normal that lie at least r outside the
+  /// body's exact shape (a flat face: the one layer a spacing away; an edge or a corner:
+  /// more). The rest counts as fluid at rest density. P_k = max(0, B ((rho_k / rho0)^gamma
+  /// - 1)), the fluid's equation of state. Call after the fluid's neighbours are built and
+  /// before addWallTerms (which gathers the pressure sums with the density share).
+  void computeSamplePressure(const Fluid& fluid);
+
+  /// The walls' pressure force, once the fluid's pressure is known: the samples are
+  /// neighbours in the fluid's symmetric pressure term,
+  ///   a_a -= sum_k rho0 V_k (P_a / rho_a^2 + P_k / rho_k^2) grad W_ak,
+  /// the gradient of the fluid's and the samples' internal energy (the samples' share of
+  /// rho_a and their own rho_k): energy-conserving, and at rest it holds the layer at a
+  /// wall at the fluid's own spacing and pressure, so no wall layer is pressed against a
+  /// wall by its own pressure. Adds to `extra` (sized n when empty) and the opposite
+  /// force and its torque to each two-way body's `reaction`. Uses the sums of the last
+  /// addWallTerms; the same bits on any number of threads.
+  void addWallPressure(const FluidState& st, std::vector<Vec3>& extra,
+                       std::vector<Wrench>& reaction) const;
+
   /// Most bodies one fluid particle is in contact with at once (the nearest are kept).
   static constexpr std::size_t kMaxContacts = 8;
   /// Contacts of a fluid centre x with every body whose exact surface is closer than the
@@ -149,6 +171,8 @@ class Boundaries {
     Aabb reach_box;  ///< where a query can find a sample within the kernel support
     std::vector<Vec3> position, normal;
     std::vector<double> volume;
+    std::vector<double> p_rho2;       ///< (n) P_k / rho_k^2 (m^5 / (kg s^2)), this step
+    std::vector<double> wall_share;   ///< (n) share of a full lattice's sum inside the wall
     std::vector<std::uint32_t> body;  ///< owning body (static set)
     std::vector<std::uint8_t> near;   ///< (cells) kNear* bits
     int density_reach = 1;            ///< cells to search for the kernel support
@@ -196,8 +220,17 @@ class Boundaries {
   /// addDensity and addWallTerms: shear and reaction may be null (density only).
   void wallPass(const Fluid& fluid, std::vector<double>& density, std::vector<Vec3>* shear,
                 std::vector<Wrench>* reaction) const;
+  /// Pressure sums of one set at a particle (set space): sum_k V_k grad W_ak and
+  /// sum_k V_k (P_k / rho_k^2) grad W_ak, and their moments sum_k x_k x (...).
+  struct PressureSums {
+    Vec3 grad = Vec3::Zero(), scaled = Vec3::Zero();
+    Vec3 grad_moment = Vec3::Zero(), scaled_moment = Vec3::Zero();
+  };
   double wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u, const Vec3& omega,
-                  Vec3& shear, Vec3* moment) const;
+                  Vec3& shear, Vec3* moment, PressureSums* pressure) const;
+  void samplePressure(const Fluid& fluid, SampleSet& set, const Mat3& rotation,
+                      const Vec3& origin) const;
+  void computeWallShare(SampleSet& set, bool body_space) const;
 
   FluidParams fluid_;
   CubicSplineKernel kernel_;
@@ -215,6 +248,14 @@ class Boundaries {
   /// Particles per chunk of addWallTerms' reaction sums (fixed: determinism).
   static constexpr std::size_t kChunk = 2048;
   mutable std::vector<Wrench> chunk_reaction_;  ///< scratch: (chunks x bodies)
+  double behind_share_ = 0.0;                   ///< 1 - S_1 of computeSamplePressure
+  /// A two-way body's pressure sums at one particle (world frame).
+  struct BodyPressure {
+    std::uint32_t particle, body;
+    PressureSums sums;
+  };
+  mutable std::vector<Vec3> pressure_grad_, pressure_scaled_;      ///< (n) all walls, world
+  mutable std::vector<std::vector<BodyPressure>> chunk_pressure_;  ///< per particle chunk
 };
 
 }  // namespace wake

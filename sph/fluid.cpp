@@ -100,6 +100,7 @@ void Fluid::updateNeighbors() {
     }
   const double support = kernel_.supportRadius();
   Aabb box{Vec3(lo[0], lo[1], lo[2]), Vec3(hi[0], hi[1], hi[2])};
+  bounds_ = box;
   if (box.empty()) box = domain_;
   const double fine = 0.5 * support;
   const double fine_cells = UniformGrid::cellsFor(box, fine);

@@ -70,6 +70,8 @@ class Fluid {
   FluidState& state() { return state_; }
   const FluidState& state() const { return state_; }
   const NeighborList& neighbors() const { return neighbors_; }
+  /// Bounds of the particles' positions at the last updateNeighbors (empty: none).
+  const Aabb& particleBounds() const { return bounds_; }
 
   /// Sorts particles by grid cell (permuting every array) and builds the neighbour lists.
   /// Particles outside the domain must have been removed before.
@@ -100,6 +102,7 @@ class Fluid {
   double mass_;
   double tait_b_;  ///< rho0 c^2 / gamma (Pa)
   UniformGrid grid_;
+  Aabb bounds_;
   FluidState state_;
   FluidState scratch_;
   NeighborList neighbors_;
