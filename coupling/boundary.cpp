@@ -182,6 +182,10 @@ void Boundaries::finalize() {
     if (b.moving >= 0)
       setBodyState(bi, {b.settings.pose, b.settings.linear_velocity, b.settings.angular_velocity});
   }
+  // The walls' own share of each sample's density (body-frame data: once).
+  computeWallShare(static_, /*body_space=*/false);
+  for (MovingBody& m : moving_)
+    computeWallShare(m.samples, /*body_space=*/true);
 }
 
 void Boundaries::setBodyState(std::size_t body, const RigidState& state) {
@@ -240,11 +244,9 @@ void Boundaries::addWallTerms(const Fluid& fluid, std::vector<double>& density,
 }
 
 double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u,
-                            const Vec3& omega, Vec3& shear, Vec3* moment,
-                            PressureSums* pressure) const {
+                            const Vec3& omega, Vec3& shear, Vec3* moment, PressureSums* pressure,
+                            bool pressure_moments) const {
   const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
-  const double h = kernel_.smoothingLength();
-  const double eps_sq = 0.01 * h * h;
   const double rb = radius_;
   const double two_nu = 2.0 * nu;
   double sum = 0.0;
@@ -257,11 +259,13 @@ double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, cons
       sum += set.volume[k] * kernel_.value(r);
       if (pressure) {
         const Vec3 g = (set.volume[k] * kernel_.derivativeOverR(r)) * d;
-        const Vec3 gs = (set.p_rho2.empty() ? 0.0 : set.p_rho2[k]) * g;
+        const Vec3 gs = set.p_rho2[k] * g;
         pressure->grad += g;
         pressure->scaled += gs;
-        pressure->grad_moment += set.position[k].cross(g);
-        pressure->scaled_moment += set.position[k].cross(gs);
+        if (pressure_moments) {
+          pressure->grad_moment += set.position[k].cross(g);
+          pressure->scaled_moment += set.position[k].cross(gs);
+        }
       }
       if (!(nu > 0.0)) continue;
       const double factor = shear_factor_[set.body[k]];
@@ -271,8 +275,7 @@ double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, cons
       // radius).
       const double beyond = d.dot(set.normal[k]) - rb;
       const double beta = beyond > rb ? 1.0 + rb / beyond : 2.0;
-      const double w = -factor * two_nu * set.volume[k] * beta * d_sq * kernel_.derivativeOverR(r) /
-                       (d_sq + eps_sq);
+      const double w = -factor * two_nu * set.volume[k] * beta * kernel_.derivativeOverR(r);
       const Vec3 rel = u - omega.cross(set.position[k]);
       shear += w * rel;
       if (moment) *moment += w * set.position[k].cross(rel);
@@ -301,32 +304,39 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
     two_way = two_way || (with_shear && bodies_[m.body].settings.twoWay());
   const std::size_t chunks = (n + kChunk - 1) / kChunk;
   if (two_way) chunk_reaction_.assign(chunks * nb, Wrench{});
-  // The pressure sums ride along when the wall terms are asked for (addWallPressure).
+  // The pressure sums ride along when the wall terms are asked for (addWallPressure);
+  // they need this step's sample pressures.
   const bool with_pressure = reaction != nullptr;
   if (with_pressure) {
-    pressure_grad_.assign(n, Vec3::Zero());
-    pressure_scaled_.assign(n, Vec3::Zero());
+    bool ready = static_.p_rho2.size() == static_.position.size();
+    for (const MovingBody& m : moving_)
+      ready = ready && m.samples.p_rho2.size() == m.samples.position.size();
+    if (!ready) throw std::logic_error("Boundaries::addWallTerms before computeSamplePressure");
+    chunk_wall_pressure_.resize(chunks);
     chunk_pressure_.resize(chunks);
   }
   const Vec3 zero = Vec3::Zero();
 #pragma omp parallel for schedule(static)
   for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
     const std::size_t end = std::min(n, (c + 1) * kChunk);
-    if (with_pressure) chunk_pressure_[c].clear();
+    if (with_pressure) {
+      chunk_wall_pressure_[c].clear();
+      chunk_pressure_[c].clear();
+    }
     for (std::size_t i = c * kChunk; i < end; ++i) {
       const Vec3 xi = x[i], vi = st.velocity[i];
       const double nu = with_shear ? st.kinematic_viscosity[i] : 0.0;
       double sum = 0.0;
       Vec3 a = Vec3::Zero();
+      WallPressure wp{static_cast<std::uint32_t>(i), Vec3::Zero(), Vec3::Zero()};
       if (has_static && (static_.near[static_.grid.cellIndex(xi)] & kNearDensity)) {
         Vec3 s = Vec3::Zero();
         PressureSums ps;
-        sum += wallSums(static_, xi, nu, vi, zero, s, nullptr, with_pressure ? &ps : nullptr);
+        sum += wallSums(static_, xi, nu, vi, zero, s, nullptr, with_pressure ? &ps : nullptr,
+                        /*pressure_moments=*/false);
         a -= s;
-        if (with_pressure) {
-          pressure_grad_[i] += ps.grad;
-          pressure_scaled_[i] += ps.scaled;
-        }
+        wp.grad += ps.grad;
+        wp.scaled += ps.scaled;
       }
       if (moving_reach_.contains(xi)) {
         for (const MovingBody& m : moving_) {
@@ -338,14 +348,15 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
           const bool react = nu > 0.0 && b.settings.twoWay();
           Vec3 s = Vec3::Zero(), moment = Vec3::Zero();
           PressureSums ps;
+          const bool two_way_body = b.settings.twoWay();
           sum += wallSums(m.samples, p, nu, rt * (vi - b.settings.linear_velocity),
                           rt * b.settings.angular_velocity, s, react ? &moment : nullptr,
-                          with_pressure ? &ps : nullptr);
+                          with_pressure ? &ps : nullptr, two_way_body);
           if (with_pressure && ps.grad.squaredNorm() > 0.0) {
             const Mat3& rot = b.rotation;
-            pressure_grad_[i] += rot * ps.grad;
-            pressure_scaled_[i] += rot * ps.scaled;
-            if (b.settings.twoWay()) {
+            wp.grad += rot * ps.grad;
+            wp.scaled += rot * ps.scaled;
+            if (two_way_body) {
               PressureSums world{rot * ps.grad, rot * ps.scaled, rot * ps.grad_moment,
                                  rot * ps.scaled_moment};
               chunk_pressure_[c].push_back({static_cast<std::uint32_t>(i), m.body, world});
@@ -362,6 +373,8 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
       }
       density[i] += rho0 * sum;
       if (with_shear) (*shear)[i] = a;
+      // Only particles within reach of a wall are kept (most of the fluid has none).
+      if (with_pressure && wp.grad.squaredNorm() > 0.0) chunk_wall_pressure_[c].push_back(wp);
     }
   }
   if (!two_way) return;
@@ -375,16 +388,18 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
 void Boundaries::addWallPressure(const FluidState& st, std::vector<Vec3>& extra,
                                  std::vector<Wrench>& reaction) const {
   const std::size_t n = st.size();
-  if (pressure_grad_.size() != n || n == 0) return;
+  if (n == 0 || chunk_wall_pressure_.size() != (n + kChunk - 1) / kChunk) return;
   if (extra.empty()) extra.assign(n, Vec3::Zero());
   const double rho0 = fluid_.rest_density;
   const double mass = fluid_.particleMass();
-  const std::int64_t count = static_cast<std::int64_t>(n);
+  const std::int64_t chunks = static_cast<std::int64_t>(chunk_wall_pressure_.size());
 #pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < count; ++i) {
-    const double pr2 = st.pressure[i] / (st.density[i] * st.density[i]);
-    extra[i] -= rho0 * (pr2 * pressure_grad_[i] + pressure_scaled_[i]);
-  }
+  for (std::int64_t c = 0; c < chunks; ++c)
+    for (const WallPressure& e : chunk_wall_pressure_[c]) {
+      const std::uint32_t i = e.particle;
+      const double pr2 = st.pressure[i] / (st.density[i] * st.density[i]);
+      extra[i] -= rho0 * (pr2 * e.grad + e.scaled);
+    }
   // Fixed order (chunks, then particles): the same bits on any number of threads.
   for (const std::vector<BodyPressure>& list : chunk_pressure_)
     for (const BodyPressure& e : list) {
@@ -422,9 +437,6 @@ void Boundaries::computeWallShare(SampleSet& set, bool body_space) const {
 }
 
 void Boundaries::computeSamplePressure(const Fluid& fluid) {
-  if (static_.wall_share.size() != static_.position.size()) computeWallShare(static_, false);
-  for (MovingBody& m : moving_)
-    if (m.samples.wall_share.size() != m.samples.position.size()) computeWallShare(m.samples, true);
   samplePressure(fluid, static_, Mat3::Identity(), Vec3::Zero());
   for (MovingBody& m : moving_) {
     const Body& b = bodies_[m.body];
@@ -442,7 +454,6 @@ void Boundaries::samplePressure(const Fluid& fluid, SampleSet& set, const Mat3& 
   const double m = fluid.particleMass();
   const double rho0 = fluid_.rest_density;
   const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
-  const double tait_b = rho0 * fluid_.speed_of_sound * fluid_.speed_of_sound / fluid_.gamma;
   const Aabb reach = grown(fluid.particleBounds(), kernel_.supportRadius());
   const std::int64_t count = static_cast<std::int64_t>(n);
 #pragma omp parallel for schedule(static)
@@ -458,8 +469,7 @@ void Boundaries::samplePressure(const Fluid& fluid, SampleSet& set, const Mat3& 
     });
     if (sum == 0.0) continue;  // no fluid near: no pressure
     const double rho = m * sum + rho0 * set.wall_share[k];
-    const double p = std::max(0.0, tait_b * (std::pow(rho / rho0, fluid_.gamma) - 1.0));
-    set.p_rho2[k] = p / (rho * rho);
+    set.p_rho2[k] = fluid_.pressure(rho) / (rho * rho);
   }
 }
 

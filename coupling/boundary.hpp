@@ -91,11 +91,12 @@ class Boundaries {
   ///   exerts any: all free slip, or an inviscid fluid). The samples take part in
   ///   the fluid's laminar viscosity (Morris et al. 1997) as a layer of fluid moving with
   ///   the wall: a_a = -sum_k (1 - eps_k) 2 nu_a V_k beta_ak (-x_ak . grad W_ak) /
-  ///   (|x_ak|^2 + 0.01 H^2) (v_a - v_k). beta_ak = min(2, 1 + r / d_a) (Morris's
-  ///   extrapolation: d_a is the particle's distance beyond the sample's surface plane and
-  ///   the sample lies r behind it) puts the no-slip condition on the wall's surface, not
-  ///   on the sample layer. A force, integrated with the step: slip eps (the body's) is a
-  ///   property of the wall, not of dt, and a wall never holds fluid against gravity.
+  ///   |x_ak|^2 (v_a - v_k), the fluid's own form (Fluid::computeAccelerations).
+  ///   beta_ak = min(2, 1 + r / d_a) (Morris's extrapolation: d_a is the particle's
+  ///   distance beyond the sample's surface plane and the sample lies r behind it) puts
+  ///   the no-slip condition on the wall's surface, not on the sample layer. A force,
+  ///   integrated with the step: slip eps (the body's) is a property of the wall, not of
+  ///   dt, and a wall never holds fluid against gravity.
   /// - `reaction` (bodies): the shear's force and torque (about the centre of mass) on
   ///   each two-way body; zero for the others. Summed in fixed particle chunks: the same
   ///   bits on any number of threads.
@@ -221,13 +222,14 @@ class Boundaries {
   void wallPass(const Fluid& fluid, std::vector<double>& density, std::vector<Vec3>* shear,
                 std::vector<Wrench>* reaction) const;
   /// Pressure sums of one set at a particle (set space): sum_k V_k grad W_ak and
-  /// sum_k V_k (P_k / rho_k^2) grad W_ak, and their moments sum_k x_k x (...).
+  /// sum_k V_k (P_k / rho_k^2) grad W_ak, and (when asked: two-way bodies) their moments
+  /// sum_k x_k x (...).
   struct PressureSums {
     Vec3 grad = Vec3::Zero(), scaled = Vec3::Zero();
     Vec3 grad_moment = Vec3::Zero(), scaled_moment = Vec3::Zero();
   };
   double wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u, const Vec3& omega,
-                  Vec3& shear, Vec3* moment, PressureSums* pressure) const;
+                  Vec3& shear, Vec3* moment, PressureSums* pressure, bool pressure_moments) const;
   void samplePressure(const Fluid& fluid, SampleSet& set, const Mat3& rotation,
                       const Vec3& origin) const;
   void computeWallShare(SampleSet& set, bool body_space) const;
@@ -248,13 +250,18 @@ class Boundaries {
   /// Particles per chunk of addWallTerms' reaction sums (fixed: determinism).
   static constexpr std::size_t kChunk = 2048;
   mutable std::vector<Wrench> chunk_reaction_;  ///< scratch: (chunks x bodies)
-  double behind_share_ = 0.0;                   ///< 1 - S_1 of computeSamplePressure
   /// A two-way body's pressure sums at one particle (world frame).
   struct BodyPressure {
     std::uint32_t particle, body;
     PressureSums sums;
   };
-  mutable std::vector<Vec3> pressure_grad_, pressure_scaled_;      ///< (n) all walls, world
+  /// One particle's pressure sums over all walls (world frame).
+  struct WallPressure {
+    std::uint32_t particle;
+    Vec3 grad, scaled;
+  };
+  /// Per particle chunk, the particles within reach of a wall only (most have none).
+  mutable std::vector<std::vector<WallPressure>> chunk_wall_pressure_;
   mutable std::vector<std::vector<BodyPressure>> chunk_pressure_;  ///< per particle chunk
 };
 

@@ -79,7 +79,6 @@ Fluid::Fluid(const FluidParams& params, const Aabb& domain)
       kernel_(params.smoothingLength()),
       domain_(domain),
       mass_(params.particleMass()),
-      tait_b_(params.rest_density * params.speed_of_sound * params.speed_of_sound / params.gamma),
       grid_(domain, params.supportRadius()) {
   if (!(params.speed_of_sound > 0.0) || !std::isfinite(params.speed_of_sound))
     throw std::invalid_argument("fluid.speed_of_sound must be finite and > 0");
@@ -131,22 +130,11 @@ void Fluid::computeFluidDensity() {
 
 void Fluid::computePressure() {
   const std::int64_t n = static_cast<std::int64_t>(state_.size());
-  const double inv_rho0 = 1.0 / params_.rest_density;
-  const double gamma = params_.gamma;
-  const bool gamma7 = gamma == 7.0;
   p_over_rho_sq_.resize(state_.size());
   inv_rho_.resize(state_.size());
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
-    const double ratio = state_.density[i] * inv_rho0;
-    double pw;
-    if (gamma7) {
-      const double r2 = ratio * ratio, r4 = r2 * r2;
-      pw = r4 * r2 * ratio;
-    } else {
-      pw = std::pow(ratio, gamma);
-    }
-    const double p = std::max(0.0, tait_b_ * (pw - 1.0));
+    const double p = params_.pressure(state_.density[i]);
     state_.pressure[i] = p;
     const double inv_rho = 1.0 / state_.density[i];
     inv_rho_[i] = inv_rho;
@@ -154,45 +142,64 @@ void Fluid::computePressure() {
   }
 }
 
-void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& extra) {
-  const std::int64_t n = static_cast<std::int64_t>(state_.size());
-  const Vec3* x = state_.position.data();
-  const Vec3* v = state_.velocity.data();
-  const double* rho = state_.density.data();
-  const double* inv_rho = inv_rho_.data();
-  const double* nu = state_.kinematic_viscosity.data();
-  const double* pr2 = p_over_rho_sq_.data();
-  const std::uint32_t* nb = neighbors_.index.data();
-  const Vec3* add = extra.empty() ? nullptr : extra.data();
-  const double h = kernel_.smoothingLength();
-  const double eps_sq = 0.01 * h * h;
-  // nu = 2 alpha H c / (rho_a + rho_b): the numerator is constant.
-  const double visc = 2.0 * params_.viscosity * h * params_.speed_of_sound;
-  const double m = mass_;
+namespace {
+
+/// The pair loop of Fluid::computeAccelerations. kUniformNu: every particle has the same
+/// kinematic viscosity nu0 (one fluid: the usual case), so Morris's coefficient is
+/// nu0 (1 / rho_a + 1 / rho_b) and the per-neighbour viscosity is not read.
+template <bool kUniformNu>
+void accelerationLoop(std::int64_t n, const Vec3* x, const Vec3* v, const double* rho,
+                      const double* inv_rho, const double* nu, const double* pr2,
+                      const NeighborList& neighbors, const CubicSplineKernel& kernel, double eps_sq,
+                      double visc, double m, const Vec3& gravity, const Vec3* add, Vec3* out) {
+  const std::uint32_t* nb = neighbors.index.data();
+  const std::uint64_t* offset = neighbors.offset.data();
+  const double nu0 = n > 0 ? nu[0] : 0.0;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
     const Vec3 xi = x[i], vi = v[i];
     const double rho_i = rho[i], inv_rho_i = inv_rho[i], nu_i = nu[i];
     const double pi_term = pr2[i];
     Vec3 acc = Vec3::Zero(), lap = Vec3::Zero();
-    for (std::uint64_t k = neighbors_.offset[i], e = neighbors_.offset[i + 1]; k < e; ++k) {
+    for (std::uint64_t k = offset[i], e = offset[i + 1]; k < e; ++k) {
       const std::uint32_t j = nb[k];
       const Vec3 xij = xi - x[j];
       const Vec3 vij = vi - v[j];
       const double r_sq = xij.squaredNorm();
-      const double dwr = kernel_.derivativeOverR(std::sqrt(r_sq));
-      const double inv_d = 1.0 / (r_sq + eps_sq);
+      const double dwr = kernel.derivativeOverR(std::sqrt(r_sq));
       double coeff = pi_term + pr2[j];
       const double vx = vij.dot(xij);
-      if (vx < 0.0) coeff += -visc / (rho_i + rho[j]) * vx * inv_d;
+      if (vx < 0.0) coeff += -visc / (rho_i + rho[j]) * vx / (r_sq + eps_sq);
       acc -= (m * coeff * dwr) * xij;
-      // Morris: x . grad W = r^2 dW/dr / r (< 0), so v_a is drawn towards v_b.
-      lap += ((nu_i * inv_rho[j] + nu[j] * inv_rho_i) * r_sq * dwr * inv_d) * vij;
+      // Morris: x . grad W / |x|^2 = dW/dr / r (< 0), so v_a is drawn towards v_b.
+      const double mu =
+          kUniformNu ? nu0 * (inv_rho[j] + inv_rho_i) : nu_i * inv_rho[j] + nu[j] * inv_rho_i;
+      lap += (mu * dwr) * vij;
     }
     acc += m * lap + gravity;
     if (add) acc += add[i];
-    state_.acceleration[i] = acc;
+    out[i] = acc;
   }
+}
+
+}  // namespace
+
+void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& extra) {
+  const std::int64_t n = static_cast<std::int64_t>(state_.size());
+  const double* nu = state_.kinematic_viscosity.data();
+  bool uniform = true;
+  for (std::int64_t i = 1; i < n && uniform; ++i)
+    uniform = nu[i] == nu[0];
+  const double h = kernel_.smoothingLength();
+  const double eps_sq = 0.01 * h * h;
+  // nu = 2 alpha H c / (rho_a + rho_b): the numerator is constant.
+  const double visc = 2.0 * params_.viscosity * h * params_.speed_of_sound;
+  const Vec3* add = extra.empty() ? nullptr : extra.data();
+  (uniform ? accelerationLoop<true>
+           : accelerationLoop<false>)(n, state_.position.data(), state_.velocity.data(),
+                                      state_.density.data(), inv_rho_.data(), nu,
+                                      p_over_rho_sq_.data(), neighbors_, kernel_, eps_sq, visc,
+                                      mass_, gravity, add, state_.acceleration.data());
 }
 
 double Fluid::maxSpeed() const {
