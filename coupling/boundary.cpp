@@ -352,7 +352,7 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
           sum += wallSums(m.samples, p, nu, rt * (vi - b.settings.linear_velocity),
                           rt * b.settings.angular_velocity, s, react ? &moment : nullptr,
                           with_pressure ? &ps : nullptr, two_way_body);
-          if (with_pressure && ps.grad.squaredNorm() > 0.0) {
+          if (with_pressure && (ps.grad.squaredNorm() > 0.0 || ps.scaled.squaredNorm() > 0.0)) {
             const Mat3& rot = b.rotation;
             wp.grad += rot * ps.grad;
             wp.scaled += rot * ps.scaled;
@@ -373,8 +373,10 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
       }
       density[i] += rho0 * sum;
       if (with_shear) (*shear)[i] = a;
-      // Only particles within reach of a wall are kept (most of the fluid has none).
-      if (with_pressure && wp.grad.squaredNorm() > 0.0) chunk_wall_pressure_[c].push_back(wp);
+      // Only particles within reach of a wall are kept (most of the fluid has none). A
+      // mirror-symmetric neighbourhood may cancel one sum but not the other: keep both.
+      if (with_pressure && (wp.grad.squaredNorm() > 0.0 || wp.scaled.squaredNorm() > 0.0))
+        chunk_wall_pressure_[c].push_back(wp);
     }
   }
   if (!two_way) return;

@@ -105,7 +105,8 @@ class Fluid {
   /// which conserves linear momentum and is exact for linear velocity fields. The factor
   /// (x . grad W) / |x|^2 is W'(r) / r, which stays finite as r -> 0 for the cubic
   /// spline, so Morris's regulariser (+0.01 H^2 in the denominator) is not needed: it
-  /// would change the factor by at most 1 % at the spacings SPH particles keep.
+  /// would change the factor by 1 % at r = H (about the spacing particles keep) and by
+  /// 4 % at r = H / 2.
   void computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& extra = {});
 
   /// Largest |v| and |a| over the particles (0 when empty).
