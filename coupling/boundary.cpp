@@ -141,6 +141,35 @@ void Boundaries::buildSet(SampleSet& set, const Aabb& box, const std::vector<Vec
   }
 }
 
+void Boundaries::markInterior(SampleSet& set, const Body* moving) {
+  // A cell beyond contact reach of every sample is wholly inside or wholly outside each
+  // body (a surface passes within a spacing of its samples): its centre tells which.
+  const Eigen::Vector3i dims = set.grid.dims();
+  const std::int64_t cells = static_cast<std::int64_t>(set.grid.cellCount());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t c = 0; c < cells; ++c) {
+    if (set.near[c] & kNearContact) continue;
+    const Eigen::Vector3i coord(static_cast<int>(c % dims[0]),
+                                static_cast<int>((c / dims[0]) % dims[1]),
+                                static_cast<int>(c / (std::int64_t(dims[0]) * dims[1])));
+    const Vec3 centre = set.grid.cellCenter(coord);
+    bool inside = false;
+    if (moving) {
+      inside = moving->settings.shape->signedDistance(centre) < 0.0;
+    } else {
+      for (const std::uint32_t bi : static_bodies_) {
+        const Body& b = bodies_[bi];
+        if (b.world_bounds.contains(centre) &&
+            b.settings.shape->signedDistance(b.settings.pose.toBody(centre)) < 0.0) {
+          inside = true;
+          break;
+        }
+      }
+    }
+    if (inside) set.near[c] |= kInterior;
+  }
+}
+
 void Boundaries::finalize() {
   if (finalized_) throw std::logic_error("Boundaries::finalize called twice");
   finalized_ = true;
@@ -157,9 +186,12 @@ void Boundaries::finalize() {
     }
     b.local.clear();
   }
-  if (!pos.empty()) buildSet(static_, domain_, pos, nrm, owner, /*flags=*/true);
   for (std::size_t bi = 0; bi < bodies_.size(); ++bi)
     if (!bodies_[bi].settings.moves()) static_bodies_.push_back(static_cast<std::uint32_t>(bi));
+  if (!pos.empty()) {
+    buildSet(static_, domain_, pos, nrm, owner, /*flags=*/true);
+    markInterior(static_, nullptr);
+  }
   // Moving bodies: one body-space set each.
   for (std::size_t bi = 0; bi < bodies_.size(); ++bi) {
     Body& b = bodies_[bi];
@@ -172,6 +204,7 @@ void Boundaries::finalize() {
     if (!box.empty()) {
       buildSet(m.samples, box, b.local.position, b.local.normal,
                std::vector<std::uint32_t>(b.local.size(), m.body), /*flags=*/true);
+      markInterior(m.samples, &b);
     }
     b.local.clear();
     b.moving = static_cast<std::int32_t>(moving_.size());
@@ -182,10 +215,6 @@ void Boundaries::finalize() {
     if (b.moving >= 0)
       setBodyState(bi, {b.settings.pose, b.settings.linear_velocity, b.settings.angular_velocity});
   }
-  // The walls' own share of each sample's density (body-frame data: once).
-  computeWallShare(static_, /*body_space=*/false);
-  for (MovingBody& m : moving_)
-    computeWallShare(m.samples, /*body_space=*/true);
 }
 
 void Boundaries::setBodyState(std::size_t body, const RigidState& state) {
@@ -244,8 +273,7 @@ void Boundaries::addWallTerms(const Fluid& fluid, std::vector<double>& density,
 }
 
 double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u,
-                            const Vec3& omega, Vec3& shear, Vec3* moment, PressureSums* pressure,
-                            bool pressure_moments) const {
+                            const Vec3& omega, Vec3& shear, Vec3* moment) const {
   const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
   const double rb = radius_;
   const double two_nu = 2.0 * nu;
@@ -257,16 +285,6 @@ double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, cons
       if (d_sq >= support_sq) continue;
       const double r = std::sqrt(d_sq);
       sum += set.volume[k] * kernel_.value(r);
-      if (pressure) {
-        const Vec3 g = (set.volume[k] * kernel_.derivativeOverR(r)) * d;
-        const Vec3 gs = set.p_rho2[k] * g;
-        pressure->grad += g;
-        pressure->scaled += gs;
-        if (pressure_moments) {
-          pressure->grad_moment += set.position[k].cross(g);
-          pressure->scaled_moment += set.position[k].cross(gs);
-        }
-      }
       if (!(nu > 0.0)) continue;
       const double factor = shear_factor_[set.body[k]];
       if (factor <= 0.0) continue;
@@ -279,6 +297,23 @@ double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, cons
       const Vec3 rel = u - omega.cross(set.position[k]);
       shear += w * rel;
       if (moment) *moment += w * set.position[k].cross(rel);
+    }
+  });
+  return sum;
+}
+
+Vec3 Boundaries::pressureSum(const SampleSet& set, const Vec3& p, double pr2, Vec3* moment) const {
+  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
+  Vec3 sum = Vec3::Zero();
+  set.grid.forEachRangeWithin(p, set.density_reach, [&](std::uint32_t lo, std::uint32_t hi) {
+    for (std::uint32_t k = lo; k < hi; ++k) {
+      const Vec3 d = p - set.position[k];
+      const double d_sq = d.squaredNorm();
+      if (d_sq >= support_sq) continue;
+      const Vec3 g =
+          ((pr2 + set.p_rho2[k]) * set.volume[k] * kernel_.derivativeOverR(std::sqrt(d_sq))) * d;
+      sum += g;
+      if (moment) *moment += set.position[k].cross(g);
     }
   });
   return sum;
@@ -304,39 +339,19 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
     two_way = two_way || (with_shear && bodies_[m.body].settings.twoWay());
   const std::size_t chunks = (n + kChunk - 1) / kChunk;
   if (two_way) chunk_reaction_.assign(chunks * nb, Wrench{});
-  // The pressure sums ride along when the wall terms are asked for (addWallPressure);
-  // they need this step's sample pressures.
-  const bool with_pressure = reaction != nullptr;
-  if (with_pressure) {
-    bool ready = static_.p_rho2.size() == static_.position.size();
-    for (const MovingBody& m : moving_)
-      ready = ready && m.samples.p_rho2.size() == m.samples.position.size();
-    if (!ready) throw std::logic_error("Boundaries::addWallTerms before computeSamplePressure");
-    chunk_wall_pressure_.resize(chunks);
-    chunk_pressure_.resize(chunks);
-  }
   const Vec3 zero = Vec3::Zero();
 #pragma omp parallel for schedule(static)
   for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
     const std::size_t end = std::min(n, (c + 1) * kChunk);
-    if (with_pressure) {
-      chunk_wall_pressure_[c].clear();
-      chunk_pressure_[c].clear();
-    }
     for (std::size_t i = c * kChunk; i < end; ++i) {
       const Vec3 xi = x[i], vi = st.velocity[i];
       const double nu = with_shear ? st.kinematic_viscosity[i] : 0.0;
       double sum = 0.0;
       Vec3 a = Vec3::Zero();
-      WallPressure wp{static_cast<std::uint32_t>(i), Vec3::Zero(), Vec3::Zero()};
       if (has_static && (static_.near[static_.grid.cellIndex(xi)] & kNearDensity)) {
         Vec3 s = Vec3::Zero();
-        PressureSums ps;
-        sum += wallSums(static_, xi, nu, vi, zero, s, nullptr, with_pressure ? &ps : nullptr,
-                        /*pressure_moments=*/false);
+        sum += wallSums(static_, xi, nu, vi, zero, s, nullptr);
         a -= s;
-        wp.grad += ps.grad;
-        wp.scaled += ps.scaled;
       }
       if (moving_reach_.contains(xi)) {
         for (const MovingBody& m : moving_) {
@@ -347,21 +362,8 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
           if (!m.samples.reach_box.contains(p)) continue;
           const bool react = nu > 0.0 && b.settings.twoWay();
           Vec3 s = Vec3::Zero(), moment = Vec3::Zero();
-          PressureSums ps;
-          const bool two_way_body = b.settings.twoWay();
           sum += wallSums(m.samples, p, nu, rt * (vi - b.settings.linear_velocity),
-                          rt * b.settings.angular_velocity, s, react ? &moment : nullptr,
-                          with_pressure ? &ps : nullptr, two_way_body);
-          if (with_pressure && (ps.grad.squaredNorm() > 0.0 || ps.scaled.squaredNorm() > 0.0)) {
-            const Mat3& rot = b.rotation;
-            wp.grad += rot * ps.grad;
-            wp.scaled += rot * ps.scaled;
-            if (two_way_body) {
-              PressureSums world{rot * ps.grad, rot * ps.scaled, rot * ps.grad_moment,
-                                 rot * ps.scaled_moment};
-              chunk_pressure_[c].push_back({static_cast<std::uint32_t>(i), m.body, world});
-            }
-          }
+                          rt * b.settings.angular_velocity, s, react ? &moment : nullptr);
           const Vec3 force = b.rotation * s;  // per unit fluid mass, on the body
           a -= force;
           if (react) {
@@ -373,10 +375,6 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
       }
       density[i] += rho0 * sum;
       if (with_shear) (*shear)[i] = a;
-      // Only particles within reach of a wall are kept (most of the fluid has none). A
-      // mirror-symmetric neighbourhood may cancel one sum but not the other: keep both.
-      if (with_pressure && (wp.grad.squaredNorm() > 0.0 || wp.scaled.squaredNorm() > 0.0))
-        chunk_wall_pressure_[c].push_back(wp);
     }
   }
   if (!two_way) return;
@@ -387,74 +385,77 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
     }
 }
 
-void Boundaries::addWallPressure(const FluidState& st, std::vector<Vec3>& extra,
+void Boundaries::addWallPressure(const Fluid& fluid, std::vector<Vec3>& extra,
                                  std::vector<Wrench>& reaction) const {
-  const std::size_t n = st.size();
-  if (n == 0 || chunk_wall_pressure_.size() != (n + kChunk - 1) / kChunk) return;
+  const FluidState& st = fluid.state();
+  const std::size_t n = st.size(), nb = bodies_.size();
+  if (n == 0 || nb == 0) return;
+  bool ready = static_.p_rho2.size() == static_.position.size();
+  for (const MovingBody& m : moving_)
+    ready = ready && m.samples.p_rho2.size() == m.samples.position.size();
+  if (!ready) throw std::logic_error("Boundaries::addWallPressure before computeSamplePressure");
   if (extra.empty()) extra.assign(n, Vec3::Zero());
   const double rho0 = fluid_.rest_density;
-  const double mass = fluid_.particleMass();
-  const std::int64_t chunks = static_cast<std::int64_t>(chunk_wall_pressure_.size());
+  const double mass = fluid.particleMass();
+  const bool has_static = !static_.position.empty();
+  bool two_way = false;
+  for (const MovingBody& m : moving_)
+    two_way = two_way || bodies_[m.body].settings.twoWay();
+  const std::size_t chunks = (n + kChunk - 1) / kChunk;
+  if (two_way) chunk_reaction_.assign(chunks * nb, Wrench{});
 #pragma omp parallel for schedule(static)
-  for (std::int64_t c = 0; c < chunks; ++c)
-    for (const WallPressure& e : chunk_wall_pressure_[c]) {
-      const std::uint32_t i = e.particle;
+  for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
+    const std::size_t end = std::min(n, (c + 1) * kChunk);
+    for (std::size_t i = c * kChunk; i < end; ++i) {
+      const Vec3 xi = st.position[i];
       const double pr2 = st.pressure[i] / (st.density[i] * st.density[i]);
-      extra[i] -= rho0 * (pr2 * e.grad + e.scaled);
-    }
-  // Fixed order (chunks, then particles): the same bits on any number of threads.
-  for (const std::vector<BodyPressure>& list : chunk_pressure_)
-    for (const BodyPressure& e : list) {
-      const double pr2 =
-          st.pressure[e.particle] / (st.density[e.particle] * st.density[e.particle]);
-      const double f = mass * rho0;
-      reaction[e.body].force += f * (pr2 * e.sums.grad + e.sums.scaled);
-      reaction[e.body].torque += f * (pr2 * e.sums.grad_moment + e.sums.scaled_moment);
-    }
-}
-
-void Boundaries::computeWallShare(SampleSet& set, bool body_space) const {
-  const std::size_t n = set.position.size();
-  set.wall_share.assign(n, 0.0);
-  const double sp = spacing_, s3 = sp * sp * sp;
-  const int reach = static_cast<int>(std::ceil(kernel_.supportRadius() / sp));
-  for (std::size_t k = 0; k < n; ++k) {
-    const Body& b = bodies_[set.body[k]];
-    const Vec3 nk = set.normal[k];
-    const Vec3 t1 = (std::abs(nk.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(nk).normalized();
-    const Vec3 t2 = nk.cross(t1);
-    double fluid = 0.0;
-    for (int i = -reach; i <= reach; ++i)
-      for (int j = -reach; j <= reach; ++j)
-        for (int l = -reach; l <= reach; ++l) {
-          const Vec3 off = sp * (i * t1 + j * t2 + l * nk);
-          const double w = kernel_.value(off.norm());
-          if (w <= 0.0) continue;
-          Vec3 p = set.position[k] + off;
-          if (!body_space) p = b.rotation.transpose() * (p - b.settings.pose.position);
-          if (b.settings.shape->signedDistance(p) >= (1.0 - 1e-6) * radius_) fluid += w;
+      Vec3 a = Vec3::Zero();
+      if (has_static && (static_.near[static_.grid.cellIndex(xi)] & kNearDensity))
+        a -= pressureSum(static_, xi, pr2, nullptr);
+      if (moving_reach_.contains(xi)) {
+        for (const MovingBody& m : moving_) {
+          if (!m.world_reach.contains(xi)) continue;
+          const Body& b = bodies_[m.body];
+          const Vec3 p = b.rotation.transpose() * (xi - b.settings.pose.position);
+          if (!m.samples.reach_box.contains(p)) continue;
+          const bool react = b.settings.twoWay();
+          Vec3 moment = Vec3::Zero();
+          const Vec3 sum = b.rotation * pressureSum(m.samples, p, pr2, react ? &moment : nullptr);
+          a -= sum;
+          if (react) {
+            Wrench& w = chunk_reaction_[c * nb + m.body];
+            w.force += (mass * rho0) * sum;
+            w.torque += (mass * rho0) * (b.rotation * moment);
+          }
         }
-    set.wall_share[k] = 1.0 - s3 * fluid;
+      }
+      extra[i] += rho0 * a;
+    }
   }
+  if (!two_way) return;
+  // Fixed order (chunks): the same bits on any number of threads.
+  for (std::size_t c = 0; c < chunks; ++c)
+    for (std::size_t b = 0; b < nb; ++b) {
+      reaction[b].force += chunk_reaction_[c * nb + b].force;
+      reaction[b].torque += chunk_reaction_[c * nb + b].torque;
+    }
 }
 
-void Boundaries::computeSamplePressure(const Fluid& fluid) {
-  samplePressure(fluid, static_, Mat3::Identity(), Vec3::Zero());
+void Boundaries::computeSamplePressure(const Fluid& fluid, const Vec3& gravity) {
+  samplePressure(fluid, static_, Mat3::Identity(), Vec3::Zero(), gravity);
   for (MovingBody& m : moving_) {
     const Body& b = bodies_[m.body];
-    samplePressure(fluid, m.samples, b.rotation, b.settings.pose.position);
+    samplePressure(fluid, m.samples, b.rotation, b.settings.pose.position, gravity);
   }
 }
 
 void Boundaries::samplePressure(const Fluid& fluid, SampleSet& set, const Mat3& rotation,
-                                const Vec3& origin) const {
+                                const Vec3& origin, const Vec3& gravity) const {
   const std::size_t n = set.position.size();
   set.p_rho2.assign(n, 0.0);
   const FluidState& st = fluid.state();
   if (st.size() == 0 || n == 0) return;
   const UniformGrid& grid = fluid.grid();
-  const double m = fluid.particleMass();
-  const double rho0 = fluid_.rest_density;
   const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
   const Aabb reach = grown(fluid.particleBounds(), kernel_.supportRadius());
   const std::int64_t count = static_cast<std::int64_t>(n);
@@ -462,16 +463,24 @@ void Boundaries::samplePressure(const Fluid& fluid, SampleSet& set, const Mat3& 
   for (std::int64_t k = 0; k < count; ++k) {
     const Vec3 xk = rotation * set.position[k] + origin;
     if (!reach.contains(xk)) continue;
-    double sum = 0.0;
+    double w_sum = 0.0, p_sum = 0.0;
+    Vec3 rise = Vec3::Zero();  // sum_a rho_a (x_k - x_a) W_ka
     grid.forEachNeighborRange(xk, [&](std::uint32_t lo, std::uint32_t hi) {
       for (std::uint32_t a = lo; a < hi; ++a) {
-        const double d_sq = (xk - st.position[a]).squaredNorm();
-        if (d_sq < support_sq) sum += kernel_.value(std::sqrt(d_sq));
+        const Vec3 d = xk - st.position[a];
+        const double d_sq = d.squaredNorm();
+        if (d_sq >= support_sq) continue;
+        const double w = kernel_.value(std::sqrt(d_sq));
+        w_sum += w;
+        p_sum += st.pressure[a] * w;
+        rise += (st.density[a] * w) * d;
       }
     });
-    if (sum == 0.0) continue;  // no fluid near: no pressure
-    const double rho = m * sum + rho0 * set.wall_share[k];
-    set.p_rho2[k] = fluid_.pressure(rho) / (rho * rho);
+    if (w_sum == 0.0) continue;  // no fluid near: no pressure
+    const double p = std::max(0.0, (p_sum + gravity.dot(rise)) / w_sum);
+    if (p == 0.0) continue;
+    const double rho = fluid_.densityAt(p);
+    set.p_rho2[k] = p / (rho * rho);
   }
 }
 
@@ -527,7 +536,8 @@ std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxCont
       if (out[q].distance > out[far].distance) far = q;
     if (d < out[far].distance) out[far].body = body, out[far].distance = d;
   };
-  if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
+  if (!static_.position.empty() &&
+      (static_.near[static_.grid.cellIndex(x)] & (kNearContact | kInterior))) {
     for (const std::uint32_t bi : static_bodies_) {
       const Body& b = bodies_[bi];
       if (b.contact_bounds.contains(x))
@@ -540,7 +550,7 @@ std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxCont
       const Body& b = bodies_[m.body];
       const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
       if (!m.samples.reach_box.contains(p) ||
-          !(m.samples.near[m.samples.grid.cellIndex(p)] & kNearContact))
+          !(m.samples.near[m.samples.grid.cellIndex(p)] & (kNearContact | kInterior)))
         continue;
       offer(m.body, b.settings.shape->signedDistance(p));
     }
@@ -624,35 +634,139 @@ bool Boundaries::contactGeometry(const Vec3& x, Contact& ct) const {
   return true;
 }
 
-void Boundaries::correctPositions(std::vector<Vec3>& x,
-                                  const std::vector<std::uint8_t>& candidates) const {
-  if (bodies_.empty()) return;
-  const std::int64_t n = static_cast<std::int64_t>(x.size());
-  const double rf = radius_;
-#pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < n; ++i) {
-    if (!candidates[i] && !moving_reach_.contains(x[i])) continue;
-    Vec3 xi = x[i];
-    std::array<Contact, kMaxContacts> contacts;
-    // A few passes over all bodies, then (when a particle is still being pushed, i.e. it
-    // is squeezed between bodies closer than its diameter) one pass over static bodies
-    // only: a squeezed particle may end inside a moving body, never through a wall.
-    bool moved = true;
-    for (int pass = 0; pass < 5 && moved; ++pass) {
-      const bool static_only = pass == 4;
-      const std::size_t count = findContacts(xi, contacts);
-      moved = false;
-      for (std::size_t c = 0; c < count; ++c) {
-        if (static_only && bodies_[contacts[c].body].moving >= 0) continue;
-        const double d = rf - (xi - contacts[c].point).dot(contacts[c].normal);
-        if (d > 0.0) {
-          xi += d * contacts[c].normal;
-          moved = true;
-        }
+double Boundaries::clearance(const Vec3& x, bool static_only) const {
+  double best = radius_;
+  if (!static_.position.empty() &&
+      (static_.near[static_.grid.cellIndex(x)] & (kNearContact | kInterior))) {
+    for (const std::uint32_t bi : static_bodies_) {
+      const Body& b = bodies_[bi];
+      if (b.contact_bounds.contains(x))
+        best = std::min(best, b.settings.shape->signedDistance(b.settings.pose.toBody(x)));
+    }
+  }
+  if (!static_only && moving_reach_.contains(x)) {
+    for (const MovingBody& m : moving_) {
+      if (!m.world_reach.contains(x)) continue;
+      const Body& b = bodies_[m.body];
+      const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
+      if (m.samples.reach_box.contains(p) &&
+          (m.samples.near[m.samples.grid.cellIndex(p)] & (kNearContact | kInterior)))
+        best = std::min(best, b.settings.shape->signedDistance(p));
+    }
+  }
+  return best;
+}
+
+bool Boundaries::projectOut(Vec3& y, double s, int passes) const {
+  const double tolerance = 1e-6 * radius_;
+  std::array<Contact, kMaxContacts> contacts;
+  for (int pass = 0; pass < passes; ++pass) {
+    const std::size_t count = findContacts(y, contacts);
+    bool moved = false;
+    for (std::size_t c = 0; c < count; ++c) {
+      const double d = s - (y - contacts[c].point).dot(contacts[c].normal);
+      if (d > tolerance) {
+        y += d * contacts[c].normal;
+        moved = true;
       }
     }
+    if (!moved) return true;
+  }
+  return clearance(y, false) >= s - tolerance;
+}
+
+namespace {
+
+/// The 26 directions from a cube's centre to its faces, edges and corners (unit).
+const std::array<Vec3, 26>& cubeDirections() {
+  static const std::array<Vec3, 26> dirs = [] {
+    std::array<Vec3, 26> d;
+    std::size_t k = 0;
+    for (int z = -1; z <= 1; ++z)
+      for (int y = -1; y <= 1; ++y)
+        for (int x = -1; x <= 1; ++x)
+          if (x != 0 || y != 0 || z != 0) d[k++] = Vec3(x, y, z).normalized();
+    return d;
+  }();
+  return dirs;
+}
+
+}  // namespace
+
+bool Boundaries::escape(Vec3& x) const {
+  // Rings half a radius apart out to eight spacings; on each, the 26 directions. The
+  // nearest ring with a point outside every body (clearance r_f / 16) wins, its point of
+  // most clearance; the straight path to it must not go deeper into a body than the
+  // particle is now (less half a radius), nor into a static body at all: fluid leaves a
+  // closed gap sideways, never through a wall or a body. Then the usual projections give
+  // it the most clearance there is room for.
+  const double rf = radius_, enough = rf / 16.0;
+  const double now = clearance(x, false);
+  const double depth_limit = std::min(now, 0.0) - 0.5 * rf;
+  const double static_limit = std::min(clearance(x, true), 0.0) - 0.5 * rf;
+  const double step = 0.5 * rf;
+  const int rings = 32;  // 16 r_f = 8 spacings
+  double best = now;     // a move must gain clearance
+  Vec3 chosen = x;
+  for (int ring = 1; ring <= rings; ++ring) {
+    for (const Vec3& u : cubeDirections()) {
+      const Vec3 y = x + (ring * step) * u;
+      const double c = clearance(y, false);
+      if (c <= best || clearance(y, true) < static_limit) continue;
+      bool open = true;
+      for (int k = 1; k < ring && open; ++k) {
+        const Vec3 q = x + (k * step) * u;
+        open = clearance(q, false) >= depth_limit && clearance(q, true) >= static_limit;
+      }
+      if (!open) continue;
+      best = c;
+      chosen = y;
+    }
+    if (best >= enough) break;  // the nearest ring with room
+  }
+  x = chosen;
+  if (best < enough) return false;  // deep inside a large body: as far out as found
+  for (double s = rf; s >= enough; s *= 0.5) {
+    Vec3 y = x;
+    if (projectOut(y, s, 4)) {
+      x = y;
+      break;
+    }
+  }
+  return true;
+}
+
+std::size_t Boundaries::correctPositions(std::vector<Vec3>& x,
+                                         const std::vector<std::uint8_t>& candidates) const {
+  if (bodies_.empty()) return 0;
+  const std::int64_t n = static_cast<std::int64_t>(x.size());
+  const double rf = radius_;
+  std::size_t stuck = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : stuck)
+  for (std::int64_t i = 0; i < n; ++i) {
+    if (!candidates[i] && !moving_reach_.contains(x[i])) continue;
+    // Full clearance r_f from every body (the usual case: one pass, or a few in corners).
+    Vec3 xi = x[i];
+    if (projectOut(xi, rf, 4)) {
+      x[i] = xi;
+      continue;
+    }
+    // Squeezed: bodies closer than a diameter. The largest clearance they all allow.
+    bool placed = false;
+    for (double s = 0.5 * rf; s >= rf / 16.0 && !placed; s *= 0.5) {
+      xi = x[i];
+      placed = projectOut(xi, s, 4);
+    }
+    if (placed) {
+      x[i] = xi;
+      continue;
+    }
+    // No room between them (the gap is closed): out of the gap, sideways.
+    xi = x[i];
+    if (!escape(xi)) ++stuck;
     x[i] = xi;
   }
+  return stuck;
 }
 
 std::size_t Boundaries::countInside(const std::vector<Vec3>& x) const {

@@ -103,26 +103,27 @@ class Boundaries {
   void addWallTerms(const Fluid& fluid, std::vector<double>& density, std::vector<Vec3>& shear,
                     std::vector<Wrench>& reaction) const;
 
-  /// Each sample's density and Tait pressure, the samples standing for fluid particles
-  /// that move with their wall: rho_k = sum_a m W(x_k - x_a) + rho0 (1 - F_k), where F_k
-  /// is the share of a full fluid lattice's kernel sum that fluid could give at x_k: the
-  /// points of a lattice aligned with the sample's normal that lie at least r outside the
-  /// body's exact shape (a flat face: the one layer a spacing away; an edge or a corner:
-  /// more). The rest counts as fluid at rest density. P_k = max(0, B ((rho_k / rho0)^gamma
-  /// - 1)), the fluid's equation of state. Call after the fluid's neighbours are built and
-  /// before addWallTerms (which gathers the pressure sums with the density share).
-  void computeSamplePressure(const Fluid& fluid);
+  /// Each sample's pressure, extrapolated from the fluid near it (Adami, Hu & Adams 2012,
+  /// "A generalized wall boundary condition for SPH"): the samples stand for fluid
+  /// particles that move with their wall, at the pressure the fluid has there,
+  ///   P_k = max(0, [sum_a P_a W_ka + g . sum_a rho_a (x_k - x_a) W_ka] / sum_a W_ka),
+  /// the second term the hydrostatic rise from the fluid to the sample (the wall's own
+  /// acceleration is neglected). It needs no estimate of how much fluid the wall's shape
+  /// leaves room for, so concave corners and edges, thin gaps and free surfaces give the
+  /// fluid's own pressure: a tank of fluid at rest stays at rest. rho_k = the fluid's
+  /// equation of state inverted at P_k. Call after the fluid's pressure is known (this
+  /// step's densities with the walls' share) and before addWallPressure.
+  void computeSamplePressure(const Fluid& fluid, const Vec3& gravity);
 
-  /// The walls' pressure force, once the fluid's pressure is known: the samples are
+  /// The walls' pressure force, once the samples' pressure is known: the samples are
   /// neighbours in the fluid's symmetric pressure term,
   ///   a_a -= sum_k rho0 V_k (P_a / rho_a^2 + P_k / rho_k^2) grad W_ak,
-  /// the gradient of the fluid's and the samples' internal energy (the samples' share of
-  /// rho_a and their own rho_k): energy-conserving, and at rest it holds the layer at a
-  /// wall at the fluid's own spacing and pressure, so no wall layer is pressed against a
-  /// wall by its own pressure. Adds to `extra` (sized n when empty) and the opposite
-  /// force and its torque to each two-way body's `reaction`. Uses the sums of the last
-  /// addWallTerms; the same bits on any number of threads.
-  void addWallPressure(const FluidState& st, std::vector<Vec3>& extra,
+  /// symmetric and momentum-conserving between the fluid and each wall: at rest it holds
+  /// the layer at a wall at the fluid's own spacing and pressure. Adds to `extra` (sized
+  /// n when empty) and the opposite force and its torque (about the centre of mass) to
+  /// each two-way body's `reaction`. Summed in fixed particle chunks: the same bits on
+  /// any number of threads.
+  void addWallPressure(const Fluid& fluid, std::vector<Vec3>& extra,
                        std::vector<Wrench>& reaction) const;
 
   /// Most bodies one fluid particle is in contact with at once (the nearest are kept).
@@ -151,13 +152,23 @@ class Boundaries {
   bool nearMovingBody(const Vec3& x) const { return moving_reach_.contains(x); }
   bool hasMovingBodies() const { return !moving_.empty(); }
 
-  /// Position correction (eq. 19-20): moves fluid centres out to at least their radius
-  /// from the tangent plane of their nearest overlapping sample, a few passes so that a
-  /// particle in a corner or between bodies ends outside all of them.
+  /// Position correction (eq. 19-20), for every body at once: moves each fluid centre to
+  /// the nearest point at least its radius r_f from every body's exact surface (Gauss-Seidel
+  /// projections on the bodies' tangent planes, contacts found again after each pass, so
+  /// corners and several bodies are handled together). A particle squeezed between bodies
+  /// closer than its diameter cannot have r_f from all of them: it is treated as one chain
+  /// with all its boundaries, and placed where the clearance is largest that all of them
+  /// allow (r_f / 2, r_f / 4, ... r_f / 16), never pushed out of one body into another or
+  /// through a wall. Where the bodies touch and no such point is near (a gap closed, a
+  /// body moved onto fluid by user code), the particle moves to the nearest point that has
+  /// r_f / 2 of clearance, found by a search over 26 directions out to eight spacings along
+  /// paths that do not cross a body: squeezed fluid goes sideways, out of the gap.
   /// Particles flagged in `candidates` and particles near a moving body are looked at:
   /// with static bodies, a particle without a contact at its predicted position x* has
-  /// none at its final one (uncontrolled particles end exactly at x*).
-  void correctPositions(std::vector<Vec3>& x, const std::vector<std::uint8_t>& candidates) const;
+  /// none at its final one (uncontrolled particles end exactly at x*). Returns the number
+  /// of particles that no move could free (0 unless bodies enclose fluid entirely).
+  std::size_t correctPositions(std::vector<Vec3>& x,
+                               const std::vector<std::uint8_t>& candidates) const;
 
   /// Number of fluid centres strictly inside some body's exact shape.
   std::size_t countInside(const std::vector<Vec3>& x) const;
@@ -173,7 +184,6 @@ class Boundaries {
     std::vector<Vec3> position, normal;
     std::vector<double> volume;
     std::vector<double> p_rho2;       ///< (n) P_k / rho_k^2 (m^5 / (kg s^2)), this step
-    std::vector<double> wall_share;   ///< (n) share of a full lattice's sum inside the wall
     std::vector<std::uint32_t> body;  ///< owning body (static set)
     std::vector<std::uint8_t> near;   ///< (cells) kNear* bits
     int density_reach = 1;            ///< cells to search for the kernel support
@@ -195,8 +205,22 @@ class Boundaries {
     SampleSet samples;
     Aabb world_reach;  ///< samples' bounds at the current pose, grown by the support
   };
-  /// Bit 1: a sample within the kernel support may exist; bit 2: within contact reach.
-  static constexpr std::uint8_t kNearDensity = 1, kNearContact = 2;
+  /// Bit 1: a sample within the kernel support may exist; bit 2: within contact reach;
+  /// bit 4: the cell lies inside a body, beyond contact reach of its surface.
+  static constexpr std::uint8_t kNearDensity = 1, kNearContact = 2, kInterior = 4;
+  /// Sets kInterior on the cells of `set` that are not near its samples and whose centre
+  /// is inside a body: the set's static bodies, or `moving` (body space).
+  void markInterior(SampleSet& set, const Body* moving);
+  /// min(r_f, signed distance of x to the nearest body surface within contact reach);
+  /// static bodies only when asked.
+  double clearance(const Vec3& x, bool static_only) const;
+  /// Gauss-Seidel projections of y to clearance s from every body in contact, at most
+  /// `passes` passes. True when y ends with clearance >= s (to a tolerance).
+  bool projectOut(Vec3& y, double s, int passes) const;
+  /// Moves x to the nearest point with clearance >= r_f / 2 reachable without crossing a
+  /// body (see correctPositions). False when there is none within eight spacings: then x
+  /// moves to the point of most clearance found, if that is more than it has now.
+  bool escape(Vec3& x) const;
 
   /// Sorts samples into `set` over `box` and computes their volumes.
   void buildSet(SampleSet& set, const Aabb& box, const std::vector<Vec3>& pos,
@@ -221,18 +245,13 @@ class Boundaries {
   /// addDensity and addWallTerms: shear and reaction may be null (density only).
   void wallPass(const Fluid& fluid, std::vector<double>& density, std::vector<Vec3>* shear,
                 std::vector<Wrench>* reaction) const;
-  /// Pressure sums of one set at a particle (set space): sum_k V_k grad W_ak and
-  /// sum_k V_k (P_k / rho_k^2) grad W_ak, and (when asked: two-way bodies) their moments
-  /// sum_k x_k x (...).
-  struct PressureSums {
-    Vec3 grad = Vec3::Zero(), scaled = Vec3::Zero();
-    Vec3 grad_moment = Vec3::Zero(), scaled_moment = Vec3::Zero();
-  };
   double wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u, const Vec3& omega,
-                  Vec3& shear, Vec3* moment, PressureSums* pressure, bool pressure_moments) const;
-  void samplePressure(const Fluid& fluid, SampleSet& set, const Mat3& rotation,
-                      const Vec3& origin) const;
-  void computeWallShare(SampleSet& set, bool body_space) const;
+                  Vec3& shear, Vec3* moment) const;
+  /// sum_k V_k (pr2 + P_k / rho_k^2) grad W_ak over one set at p (set space), and its
+  /// moment sum_k x_k x (...) when asked (two-way bodies).
+  Vec3 pressureSum(const SampleSet& set, const Vec3& p, double pr2, Vec3* moment) const;
+  void samplePressure(const Fluid& fluid, SampleSet& set, const Mat3& rotation, const Vec3& origin,
+                      const Vec3& gravity) const;
 
   FluidParams fluid_;
   CubicSplineKernel kernel_;
@@ -250,19 +269,6 @@ class Boundaries {
   /// Particles per chunk of addWallTerms' reaction sums (fixed: determinism).
   static constexpr std::size_t kChunk = 2048;
   mutable std::vector<Wrench> chunk_reaction_;  ///< scratch: (chunks x bodies)
-  /// A two-way body's pressure sums at one particle (world frame).
-  struct BodyPressure {
-    std::uint32_t particle, body;
-    PressureSums sums;
-  };
-  /// One particle's pressure sums over all walls (world frame).
-  struct WallPressure {
-    std::uint32_t particle;
-    Vec3 grad, scaled;
-  };
-  /// Per particle chunk, the particles within reach of a wall only (most have none).
-  mutable std::vector<std::vector<WallPressure>> chunk_wall_pressure_;
-  mutable std::vector<std::vector<BodyPressure>> chunk_pressure_;  ///< per particle chunk
 };
 
 }  // namespace wake

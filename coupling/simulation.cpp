@@ -264,16 +264,16 @@ double Simulation::step(double t_limit) {
   fluid_->computeFluidDensity();
   timings_.density += secondsSince(t0);
   t0 = Clock::now();
-  // The walls' density share, viscous shear and pressure sums (their part of the
-  // fluid's sums), with the samples' own pressure.
-  boundaries_->computeSamplePressure(*fluid_);
+  // The walls' density share and viscous shear (their part of the fluid's sums).
   boundaries_->addWallTerms(*fluid_, st.density, wall_shear_, wall_reaction_);
   timings_.boundary += secondsSince(t0);
   t0 = Clock::now();
   fluid_->computePressure();
   timings_.density += secondsSince(t0);
   t0 = Clock::now();
-  boundaries_->addWallPressure(st, wall_shear_, wall_reaction_);
+  // The walls' pressure force: the samples at the fluid's pressure there.
+  boundaries_->computeSamplePressure(*fluid_, settings_.gravity);
+  boundaries_->addWallPressure(*fluid_, wall_shear_, wall_reaction_);
   timings_.boundary += secondsSince(t0);
 
   t0 = Clock::now();

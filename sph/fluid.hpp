@@ -43,6 +43,12 @@ struct FluidParams {
     const double b = rest_density * speed_of_sound * speed_of_sound / gamma;
     return std::max(0.0, b * (pw - 1.0));
   }
+  /// The density at which Tait's equation gives pressure p >= 0 (its inverse):
+  /// rho0 (1 + p / B)^(1 / gamma).
+  double densityAt(double p) const {
+    const double b = rest_density * speed_of_sound * speed_of_sound / gamma;
+    return rest_density * std::pow(1.0 + p / b, 1.0 / gamma);
+  }
   double smoothingLength() const { return smoothing_ratio * spacing(); }
   double supportRadius() const { return 2.0 * smoothingLength(); }
   /// Mass of one particle (kg): rest density times the lattice cell volume.

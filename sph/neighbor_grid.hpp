@@ -47,6 +47,10 @@ class UniformGrid {
     return static_cast<std::uint32_t>((c[2] * dims_[1] + c[1]) * dims_[0] + c[0]);
   }
   std::uint32_t cellIndex(const Vec3& p) const { return cellIndex(cellCoord(p)); }
+  /// Centre of cell c.
+  Vec3 cellCenter(const Eigen::Vector3i& c) const {
+    return origin_ + cell_size_ * (c.cast<double>().array() + 0.5).matrix();
+  }
 
   /// Counting sort of `points` by cell. Afterwards `order[k]` is the input index of the
   /// k-th sorted point, and sorted points of cell c are [cellStart(c), cellStart(c + 1)).

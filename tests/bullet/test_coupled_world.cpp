@@ -143,6 +143,44 @@ TEST(CoupledWorld, KinematicBodyMovesWithItsVelocityAndPushesTheFluid) {
   EXPECT_GT(vx_front / front, 0.25);
 }
 
+TEST(CoupledWorld, FluidInsideABodyTheUserMovedIsExpelledInTheNextStep) {
+  // User code puts a box down in the middle of the water, on the floor: the fluid it now
+  // covers leaves it in the next step, to the box's nearest free side (never into the
+  // floor, which the box rests on).
+  World w;
+  btRigidBody* floor =
+      w.add(std::make_unique<btBoxShape>(btVector3(0.5f, 0.05f, 0.5f)), 0, btVector3(0, -0.05f, 0));
+  const btVector3 half(0.07f, 0.04f, 0.06f);
+  btRigidBody* box = w.add(std::make_unique<btBoxShape>(half), 2.0, btVector3(0, 0.5f, 0));
+  CoupledWorld fluid(w.world, smallFluid());
+  fluid.addFluidBlock(Vec3(-0.2, 0.0, -0.2), Vec3(0.2, 0.1, 0.2));
+  fluid.couple(floor, {"floor"});
+  fluid.couple(box, {"box"});
+  fluid.advance(0.005);
+  ASSERT_EQ(fluid.simulation().maxPenetrating(), 0u);
+  btTransform moved;
+  moved.setIdentity();
+  moved.setOrigin(btVector3(0.01f, half.y(), -0.02f));
+  box->setWorldTransform(moved);
+  box->setLinearVelocity(btVector3(0, 0, 0));
+  // Fluid centres under the box now (the box's shape, its new pose).
+  std::size_t covered = 0;
+  const FluidState& st = fluid.simulation().fluid().state();
+  for (std::size_t i = 0; i < st.size(); ++i) {
+    const Vec3 d = st.position[i] - Vec3(0.01, half.y(), -0.02);
+    covered +=
+        std::abs(d.x()) < half.x() && std::abs(d.y()) < half.y() && std::abs(d.z()) < half.z();
+  }
+  EXPECT_GT(covered, 50u);
+  const std::size_t before = fluid.simulation().fluidParticles();
+  fluid.advance(0.0005);
+  EXPECT_EQ(fluid.simulation().maxPenetrating(), 0u);
+  EXPECT_EQ(fluid.simulation().lostParticles(), 0u);
+  EXPECT_EQ(fluid.simulation().fluidParticles(), before);
+  for (std::size_t i = 0; i < st.size(); ++i)
+    EXPECT_GT(st.position[i].y(), 0.0) << "pushed into the floor";
+}
+
 TEST(CoupledWorld, CoupleAfterStartIsRefused) {
   World w;
   btRigidBody* ball = w.add(std::make_unique<btSphereShape>(0.05f), 1.0, btVector3(0, 1, 0));

@@ -1,0 +1,139 @@
+// Position correction with several bodies at once (Boundaries::correctPositions): fluid
+// squeezed between a moving body and a wall stays between them at a reduced clearance,
+// fluid caught in a closed gap leaves it sideways, and fluid inside a body that was moved
+// onto it is expelled to the nearest free side, never through the floor.
+#include "coupling/boundary.hpp"
+#include "test_support.hpp"
+
+#include <random>
+
+namespace wake::test {
+namespace {
+
+constexpr double kR = 0.005;  // fluid particle radius (m)
+
+FluidParams fluidParams() {
+  FluidParams f;
+  f.particle_radius = kR;
+  f.speed_of_sound = 20.0;
+  return f;
+}
+
+/// A static floor (top face at y = 0, 4 cm thick) and a kinematic box of half extents
+/// `half`, turned by `angle` about y, whose bottom face is `gap` above the floor (< 0:
+/// it overlaps the floor, as Bullet's contacts allow).
+std::unique_ptr<Boundaries> floorAndBox(double gap, const Vec3& half, double angle = 0.0) {
+  auto b = std::make_unique<Boundaries>(fluidParams(),
+                                        Aabb{Vec3(-0.3, -0.3, -0.3), Vec3(0.3, 0.3, 0.3)});
+  b->addBody(staticBody("floor", makeBox(Vec3(0.2, 0.02, 0.2)), 0, 0,
+                        Pose{Vec3(0, -0.02, 0), Quat::Identity()}));
+  BodySettings box = staticBody("box", makeBox(half));
+  box.kind = BodyKind::Kinematic;
+  box.pose.position = Vec3(0, gap + half.y(), 0);
+  box.pose.orientation = Quat(Eigen::AngleAxisd(angle, Vec3::UnitY()));
+  b->addBody(box);
+  b->finalize();
+  return b;
+}
+
+/// Distance from p (world) to the box's exact surface (< 0 inside).
+double boxDistance(const Boundaries& b, const Vec3& p) {
+  return b.body(1).shape->signedDistance(b.body(1).pose.toBody(p));
+}
+double floorDistance(const Boundaries& b, const Vec3& p) {
+  return b.body(0).shape->signedDistance(b.body(0).pose.toBody(p));
+}
+
+TEST(Correction, SqueezedParticleStaysInTheGapClearOfBoth) {
+  // A gap of one radius (half a diameter): no point has r from both, so the particle
+  // goes where it has the most clearance both allow, still between them.
+  const Vec3 half(0.03, 0.02, 0.03);
+  for (const double gap : {1.0 * kR, 0.6 * kR, 0.3 * kR}) {
+    const auto b = floorAndBox(gap, half);
+    std::vector<Vec3> x;
+    for (double y : {0.05 * gap, 0.5 * gap, 0.95 * gap, gap + 0.5 * kR, -0.4 * kR})
+      for (double px = -0.02; px <= 0.02 + 1e-12; px += 0.01)
+        x.emplace_back(px, y, 0.013 * px / 0.02);
+    const std::vector<std::uint8_t> all(x.size(), 1);
+    EXPECT_EQ(b->correctPositions(x, all), 0u);
+    EXPECT_EQ(b->countInside(x), 0u) << "gap " << gap;
+    for (const Vec3& p : x) {
+      EXPECT_GE(floorDistance(*b, p), 0.24 * gap) << "gap " << gap << " at " << p.transpose();
+      EXPECT_GE(boxDistance(*b, p), 0.24 * gap) << "gap " << gap << " at " << p.transpose();
+      EXPECT_LT(p.y(), gap) << "left the gap: " << p.transpose();
+      EXPECT_LT(std::abs(p.x()), half.x()) << "left the gap: " << p.transpose();
+    }
+  }
+}
+
+TEST(Correction, FluidInAClosedGapLeavesSidewaysNeverThroughTheFloor) {
+  // The box rests on the floor (gap 0) or is pressed into it: no room between them, so
+  // the fluid caught there goes out under the box's nearest side.
+  const Vec3 half(0.03, 0.02, 0.025);
+  for (const double gap : {0.0, -0.3 * kR}) {
+    for (const double angle : {0.0, 0.4}) {
+      const auto b = floorAndBox(gap, half, angle);
+      std::vector<Vec3> start;
+      for (double u = -0.025; u <= 0.025 + 1e-12; u += 0.005)
+        for (double w = -0.02; w <= 0.02 + 1e-12; w += 0.008)
+          start.push_back(Vec3(u, 0.3 * kR, w));
+      std::vector<Vec3> x = start;
+      const std::vector<std::uint8_t> all(x.size(), 1);
+      EXPECT_EQ(b->correctPositions(x, all), 0u);
+      EXPECT_EQ(b->countInside(x), 0u) << "gap " << gap << " angle " << angle;
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        const Vec3 local = b->body(1).pose.toBody(start[i]);
+        // The way out under the box: its nearest side (in the box's frame), plus the
+        // half radius of clearance, on a search ring half a radius wide, diagonal
+        // included.
+        const double side =
+            std::min(half.x() - std::abs(local.x()), half.z() - std::abs(local.z()));
+        EXPECT_GT(x[i].y(), -kR) << "through the floor: " << x[i].transpose();
+        EXPECT_GE(floorDistance(*b, x[i]), 0.0);
+        EXPECT_GE(boxDistance(*b, x[i]), 0.0);
+        EXPECT_LT((x[i] - start[i]).norm(), std::sqrt(2.0) * (side + 1.5 * kR))
+            << "from " << start[i].transpose() << " to " << x[i].transpose();
+      }
+    }
+  }
+}
+
+TEST(Correction, FluidInsideABodyMovedOntoItGoesToTheNearestFreeSide) {
+  // A large box put down on fluid (user code moving a body): every centre inside it is
+  // expelled to the box's nearest face that is not against the floor.
+  const Vec3 half(0.06, 0.04, 0.05);
+  const auto b = floorAndBox(0.0, half);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> ux(-0.058, 0.058), uy(0.001, 0.079), uz(-0.048, 0.048);
+  std::vector<Vec3> start;
+  for (int k = 0; k < 300; ++k)
+    start.emplace_back(ux(rng), uy(rng), uz(rng));
+  std::vector<Vec3> x = start;
+  const std::vector<std::uint8_t> all(x.size(), 1);
+  const std::size_t stuck = b->correctPositions(x, all);
+  EXPECT_EQ(stuck, 0u);
+  EXPECT_EQ(b->countInside(x), 0u);
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const Vec3 p = start[i] - b->body(1).pose.position;
+    // Free faces: the four sides and the top.
+    const double free_side =
+        std::min({half.x() - std::abs(p.x()), half.z() - std::abs(p.z()), half.y() - p.y()});
+    EXPECT_GT(x[i].y(), -kR) << "through the floor: " << x[i].transpose();
+    EXPECT_GE(boxDistance(*b, x[i]), 0.0);
+    EXPECT_LT((x[i] - start[i]).norm(), std::sqrt(2.0) * (free_side + 1.5 * kR))
+        << "from " << start[i].transpose() << " to " << x[i].transpose();
+  }
+}
+
+TEST(Correction, ParticlesAwayFromBodiesDoNotMove) {
+  const auto b = floorAndBox(0.02, Vec3(0.03, 0.02, 0.03));
+  std::vector<Vec3> x = {Vec3(0.1, 0.05, 0), Vec3(0, 0.066, 0), Vec3(0.0, 1.0 * kR, 0.1)};
+  const std::vector<Vec3> start = x;
+  const std::vector<std::uint8_t> all(x.size(), 1);
+  EXPECT_EQ(b->correctPositions(x, all), 0u);
+  for (std::size_t i = 0; i < x.size(); ++i)
+    EXPECT_EQ(x[i], start[i]);
+}
+
+}  // namespace
+}  // namespace wake::test

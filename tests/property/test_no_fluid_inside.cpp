@@ -1,0 +1,186 @@
+// Property: no fluid centre inside any body after any step, and nothing leaves a closed
+// tank, in random scenes. Boxes, spheres and capsules of random density (0.2-3 times the
+// fluid's), size and orientation are dropped into narrow tanks, so that they float,
+// sink, roll and jam against the walls and each other (some sized to leave a gap of
+// zero to three spacings to the tank's narrow walls); sometimes a kinematic plate comes
+// down on them. Local and global control, slip 0 and 1.
+//
+// CI runs a few cases at a small resolution. Run more, or finer, with
+//   WAKE_PROPERTY_CASES=100 WAKE_PROPERTY_RADIUS=0.004 build/tests/wake_property_tests
+// (cases per control method, first seed WAKE_PROPERTY_SEED, default 1).
+#include "bullet_bridge/scene_world.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace wake {
+namespace {
+
+int envInt(const char* name, int fallback) {
+  const char* v = std::getenv(name);
+  return v ? std::atoi(v) : fallback;
+}
+double envDouble(const char* name, double fallback) {
+  const char* v = std::getenv(name);
+  return v ? std::atof(v) : fallback;
+}
+
+struct Case {
+  SimulationSettings sim;
+  std::vector<BodySpec> bodies;
+  std::string text;  ///< what was drawn, for the failure message
+  double end = 0.6;  ///< s
+};
+
+/// One random scene: a narrow tank partly filled, one to three bodies, maybe a plate.
+Case randomCase(unsigned seed, CouplingMethod method, double radius) {
+  std::mt19937 rng(seed);
+  auto uniform = [&](double a, double b) {
+    return std::uniform_real_distribution<double>(a, b)(rng);
+  };
+  Case c;
+  const double sp = 2 * radius;
+  const double width = uniform(0.10, 0.20), narrow = uniform(0.05, 0.10), height = 0.25;
+  const double fill = uniform(0.06, 0.12);
+  const double slip = seed % 2 == 0 ? 0.0 : 1.0;
+  c.sim.fluid.particle_radius = radius;
+  c.sim.fluid.viscosity = 0.05;
+  c.sim.method = method;
+  c.sim.blocks.push_back({Vec3::Zero(), Vec3(width, fill, narrow)});
+  BodySpec tank;
+  tank.name = "tank";
+  tank.coupling = CouplingMode::OneWay;
+  tank.shape.type = "tank";
+  tank.shape.min = Vec3::Zero();
+  tank.shape.max = Vec3(width, height, narrow);
+  tank.slip = slip;
+  c.bodies.push_back(tank);
+  char line[256];
+  std::snprintf(line, sizeof line, "seed %u %s slip %.0f tank %.3f x %.3f fill %.3f;", seed,
+                method == CouplingMethod::Global ? "global" : "local", slip, width, narrow, fill);
+  c.text = line;
+
+  struct Placed {
+    Vec3 at;
+    double r;
+  };
+  std::vector<Placed> placed;
+  const int count = 1 + int(rng() % 3);
+  for (int k = 0; k < count; ++k) {
+    BodySpec b;
+    b.name = "b" + std::to_string(k);
+    b.kind = BodyKind::Dynamic;
+    b.slip = slip;
+    b.density = 1000.0 * uniform(0.2, 3.0);
+    const int type = int(rng() % 3);
+    // Jammed: as wide as the narrow side less a gap of 0 to 3 spacings.
+    const bool jam = uniform(0, 1) < 0.4;
+    const double gap = uniform(0, 3) * sp;
+    const double half_z =
+        jam ? std::max(0.01, 0.5 * narrow - gap) : uniform(0.01, std::min(0.035, 0.45 * narrow));
+    bool aligned = jam || uniform(0, 1) < 0.3;
+    double bound = 0;
+    if (type == 0) {
+      b.shape.type = "box";
+      b.shape.half_extents = Vec3(uniform(0.01, 0.04), uniform(0.01, 0.035), half_z);
+      bound = b.shape.half_extents.norm();
+    } else if (type == 1) {
+      b.shape.type = "sphere";
+      b.shape.radius = half_z;
+      bound = half_z;
+      aligned = true;
+    } else {
+      b.shape.type = "capsule";
+      b.shape.radius = std::min(half_z, 0.03);
+      b.shape.height = uniform(0.0, 0.05);
+      bound = b.shape.radius + 0.5 * b.shape.height;
+    }
+    if (!aligned) {
+      b.pose.orientation =
+          Quat(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1), uniform(-1, 1)).normalized();
+    } else if (type != 1) {
+      // About z only (keeps the narrow extent); capsules lie along x half the time.
+      const double a = (type == 2 && uniform(0, 1) < 0.5) ? 0.5 * M_PI : uniform(-0.4, 0.4);
+      b.pose.orientation = Quat(Eigen::AngleAxisd(a, Vec3::UnitZ()));
+    }
+    bool ok = false;
+    Vec3 at = Vec3::Zero();
+    for (int tries = 0; tries < 200 && !ok; ++tries) {
+      const double reach = aligned ? std::min(bound, 0.5 * width - 0.002) : bound;
+      at.x() = uniform(reach + 0.002, width - reach - 0.002);
+      at.y() = uniform(bound + sp, height - bound);
+      at.z() = aligned ? 0.5 * narrow : uniform(bound, narrow - bound);
+      ok = at.x() > 0 && at.x() < width && (aligned || (at.z() > bound && at.z() < narrow - bound));
+      for (const Placed& p : placed)
+        ok = ok && (at - p.at).norm() > p.r + bound + 0.003;
+    }
+    if (!ok) continue;
+    placed.push_back({at, bound});
+    b.pose.position = at;
+    c.bodies.push_back(b);
+    std::snprintf(line, sizeof line, " %s %s density %.0f at (%.3f %.3f %.3f)%s;", b.name.c_str(),
+                  b.shape.type.c_str(), b.density, at.x(), at.y(), at.z(), jam ? " jammed" : "");
+    c.text += line;
+  }
+  if (uniform(0, 1) < 0.3) {
+    // A kinematic plate across the tank comes down through the bodies.
+    BodySpec plate;
+    plate.name = "plate";
+    plate.kind = BodyKind::Kinematic;
+    plate.coupling = CouplingMode::OneWay;
+    plate.slip = slip;
+    plate.shape.type = "box";
+    plate.shape.half_extents = Vec3(0.3 * width, 0.01, 0.5 * narrow - uniform(0, 2) * sp);
+    plate.pose.position = Vec3(0.5 * width, height - 0.01, 0.5 * narrow);
+    plate.linear_velocity = Vec3(0, -uniform(0.1, 0.3), 0);
+    c.bodies.push_back(plate);
+    std::snprintf(line, sizeof line, " plate down at %.2f m/s;", -plate.linear_velocity.y());
+    c.text += line;
+  }
+  return c;
+}
+
+void runCases(CouplingMethod method) {
+  const int cases = envInt("WAKE_PROPERTY_CASES", 3);
+  const unsigned first = unsigned(envInt("WAKE_PROPERTY_SEED", 1));
+  const double radius = envDouble("WAKE_PROPERTY_RADIUS", 0.005);
+  std::size_t worst_inside = 0, worst_lost = 0;
+  for (unsigned seed = first; seed < first + unsigned(cases); ++seed) {
+    Case c = randomCase(seed, method, radius);
+    SceneWorld world(c.sim, c.bodies);
+    std::size_t steps_checked = 0;
+    for (double t = 0.01; t < c.end + 1e-9; t += 0.01) {
+      world.coupled().advanceTo(t);  // max_penetrating counts after every step
+      ++steps_checked;
+    }
+    const Simulation& sim = world.simulation();
+    std::printf("[ property ] %s steps %llu, max density %.3f: max_penetrating %zu, lost %zu\n",
+                c.text.c_str(), static_cast<unsigned long long>(sim.steps()), sim.maxDensityRatio(),
+                sim.maxPenetrating(), sim.lostParticles());
+    std::fflush(stdout);
+    EXPECT_EQ(sim.maxPenetrating(), 0u) << c.text;
+    EXPECT_EQ(sim.lostParticles(), 0u) << c.text;
+    worst_inside = std::max(worst_inside, sim.maxPenetrating());
+    worst_lost = std::max(worst_lost, sim.lostParticles());
+  }
+  std::printf("[ property ] %d cases: worst max_penetrating %zu, worst lost %zu\n", cases,
+              worst_inside, worst_lost);
+}
+
+TEST(NoFluidInside, RandomBodiesInNarrowTanksLocalControl) {
+  runCases(CouplingMethod::Local);
+}
+
+TEST(NoFluidInside, RandomBodiesInNarrowTanksGlobalControl) {
+  runCases(CouplingMethod::Global);
+}
+
+}  // namespace
+}  // namespace wake
