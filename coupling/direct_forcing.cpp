@@ -160,7 +160,7 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMetho
   };
   if (!global) {
     reduceImpulses();
-    supportBackedContacts(dt, v, predicted, two_way, chunk_count, wrench);
+    supportBackedContacts(dt, predicted, two_way, chunk_count, wrench);
     return result;
   }
 
@@ -203,12 +203,11 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMetho
     }
   }
   reduceImpulses();
-  supportBackedContacts(dt, v, predicted, two_way, chunk_count, wrench);
+  supportBackedContacts(dt, predicted, two_way, chunk_count, wrench);
   return result;
 }
 
-void DirectForcing::supportBackedContacts(double dt, const std::vector<Vec3>& v,
-                                          const std::vector<RigidPrediction>& predicted,
+void DirectForcing::supportBackedContacts(double dt, const std::vector<RigidPrediction>& predicted,
                                           const std::vector<std::uint8_t>& two_way,
                                           std::size_t chunk_count, std::vector<Wrench>& wrench) {
   // A particle pressed between a two-way body and a one-way one (a box settling on the
@@ -225,10 +224,16 @@ void DirectForcing::supportBackedContacts(double dt, const std::vector<Vec3>& v,
       const std::size_t count = rec->count;
       for (std::size_t a = 0; a < count && count > 1; ++a) {
         if (!two_way[rec[a].body]) continue;
-        bool backed = false;
-        for (std::size_t b = 0; b < count; ++b)
-          backed = backed || (!two_way[rec[b].body] && rec[a].normal.dot(rec[b].normal) < -0.5);
-        if (backed) backed_.push_back(rec[a]);
+        // The most opposed one-way contact backs it.
+        double opposed = -0.5;
+        std::size_t backer = count;
+        for (std::size_t b = 0; b < count; ++b) {
+          const double cosine = rec[a].normal.dot(rec[b].normal);
+          if (!two_way[rec[b].body] && cosine < opposed) opposed = cosine, backer = b;
+        }
+        if (backer == count) continue;
+        backed_.push_back(rec[a]);
+        backed_.back().backer = rec[backer].v_cp;
       }
       k += count;
     }
@@ -249,8 +254,12 @@ void DirectForcing::supportBackedContacts(double dt, const std::vector<Vec3>& v,
       for (std::size_t c = 0; c < backed_.size(); ++c) {
         const Record& rec = backed_[c];
         if (rec.body != b) continue;
+        // The particle moves with the one-way body behind it (that contact fixed its
+        // normal velocity): the body approaches that body, not the particle's own
+        // velocity, which would let a fast particle push the body as if it had no end of
+        // mass.
         const Vec3 v_body = rec.v_cp + dV + dW.cross(rec.lever);
-        const double vn = (v[rec.particle] - v_body).dot(rec.normal);
+        const double vn = (rec.backer - v_body).dot(rec.normal);
         const Vec3 rn = rec.lever.cross(rec.normal);
         const double k = normalCompliance(0.0, p.inverse_mass, inv_i, rec.lever, rec.normal);
         const double j = std::max(-lambda_[c], (rec.bounce - vn) / k);

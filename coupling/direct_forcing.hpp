@@ -111,6 +111,9 @@ class DirectForcing {
     Vec3 v_cp = Vec3::Zero();  ///< contact-point velocity of the predicted body
     Vec3 normal = Vec3::Zero();
     double psi = 0;  ///< normal velocity change to the target, body unmoved (m/s)
+    /// Backed contacts (supportBackedContacts): velocity of the one-way body behind the
+    /// particle, at its contact point.
+    Vec3 backer = Vec3::Zero();
   };
   struct Chunk {
     std::vector<Record> records;
@@ -122,8 +125,7 @@ class DirectForcing {
   /// Contacts of two-way bodies with particles that a one-way body backs: their impulse
   /// goes to the body alone (projected Gauss-Seidel), so the body rests on the particle
   /// as on the wall behind it and cannot squeeze it into either.
-  void supportBackedContacts(double dt, const std::vector<Vec3>& v,
-                             const std::vector<RigidPrediction>& predicted,
+  void supportBackedContacts(double dt, const std::vector<RigidPrediction>& predicted,
                              const std::vector<std::uint8_t>& two_way, std::size_t chunk_count,
                              std::vector<Wrench>& wrench);
 

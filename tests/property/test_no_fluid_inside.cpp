@@ -138,7 +138,11 @@ Case randomCase(unsigned seed, CouplingMethod method, double radius) {
     plate.slip = slip;
     plate.shape.type = "box";
     plate.shape.half_extents = Vec3(0.3 * width, 0.01, 0.5 * narrow - uniform(0, 2) * sp);
-    plate.pose.position = Vec3(0.5 * width, height - 0.01, 0.5 * narrow);
+    // Above every body (Bullet would throw an overlapping body out at once).
+    double top = height - 0.01;
+    for (const Placed& p : placed)
+      top = std::max(top, p.at.y() + p.r + 0.015);
+    plate.pose.position = Vec3(0.5 * width, top, 0.5 * narrow);
     plate.linear_velocity = Vec3(0, -uniform(0.1, 0.3), 0);
     c.bodies.push_back(plate);
     std::snprintf(line, sizeof line, " plate down at %.2f m/s;", -plate.linear_velocity.y());
