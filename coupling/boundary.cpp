@@ -695,45 +695,46 @@ const std::array<Vec3, 26>& cubeDirections() {
 
 bool Boundaries::escape(Vec3& x) const {
   // Rings half a radius apart out to eight spacings; on each, the 26 directions. The
-  // nearest ring with a point outside every body (clearance r_f / 16) wins, its point of
-  // most clearance; the straight path to it must not go deeper into a body than the
-  // particle is now (less half a radius), nor into a static body at all: fluid leaves a
-  // closed gap sideways, never through a wall or a body. Then the usual projections give
-  // it the most clearance there is room for.
-  const double rf = radius_, enough = rf / 16.0;
+  // nearest ring with a point where the particle can have half its radius from every
+  // body wins (its point of most clearance); the straight path to it must not go deeper
+  // into a body than the particle is now (less half a radius), nor into a static body at
+  // all: fluid leaves a closed or too thin gap sideways, never through a wall or a body.
+  const double rf = radius_;
   const double now = clearance(x, false);
   const double depth_limit = std::min(now, 0.0) - 0.5 * rf;
   const double static_limit = std::min(clearance(x, true), 0.0) - 0.5 * rf;
   const double step = 0.5 * rf;
-  const int rings = 32;  // 16 r_f = 8 spacings
-  double best = now;     // a move must gain clearance
-  Vec3 chosen = x;
+  const int rings = 32;   // 16 r_f = 8 spacings
+  double progress = now;  // most clearance reached on an open path (if none has room)
+  Vec3 farthest = x;
   for (int ring = 1; ring <= rings; ++ring) {
+    double best = -std::numeric_limits<double>::infinity();
+    Vec3 chosen = x;
     for (const Vec3& u : cubeDirections()) {
       const Vec3 y = x + (ring * step) * u;
       const double c = clearance(y, false);
-      if (c <= best || clearance(y, true) < static_limit) continue;
+      if (c <= now || clearance(y, true) < static_limit) continue;
       bool open = true;
       for (int k = 1; k < ring && open; ++k) {
         const Vec3 q = x + (k * step) * u;
         open = clearance(q, false) >= depth_limit && clearance(q, true) >= static_limit;
       }
       if (!open) continue;
+      if (c > progress) progress = c, farthest = y;
+      if (c < rf / 16.0 || c <= best) continue;
+      Vec3 room = y;  // half a radius from every body there?
+      if (!projectOut(room, 0.5 * rf, 3)) continue;
       best = c;
-      chosen = y;
+      chosen = room;
     }
-    if (best >= enough) break;  // the nearest ring with room
-  }
-  x = chosen;
-  if (best < enough) return false;  // deep inside a large body: as far out as found
-  for (double s = rf; s >= enough; s *= 0.5) {
-    Vec3 y = x;
-    if (projectOut(y, s, 4)) {
-      x = y;
-      break;
+    if (best > -std::numeric_limits<double>::infinity()) {
+      Vec3 full = chosen;
+      x = projectOut(full, rf, 4) ? full : chosen;
+      return true;
     }
   }
-  return true;
+  x = farthest;  // deep inside a large body, or no way out near: as far out as found
+  return false;
 }
 
 std::size_t Boundaries::correctPositions(std::vector<Vec3>& x,
@@ -751,20 +752,31 @@ std::size_t Boundaries::correctPositions(std::vector<Vec3>& x,
       x[i] = xi;
       continue;
     }
-    // Squeezed: bodies closer than a diameter. The largest clearance they all allow.
+    // Squeezed: bodies closer than a diameter. Half the radius from each, when there is
+    // room for it (a gap of at least one radius), at a raised density.
+    xi = x[i];
+    if (projectOut(xi, 0.5 * rf, 4)) {
+      x[i] = xi;
+      continue;
+    }
+    // A thinner gap (or a closed one): out of it, sideways, as a film too thin for a
+    // particle drains. Only where no way out is near, the most clearance the bodies allow.
+    Vec3 out = x[i];
+    if (escape(out)) {
+      x[i] = out;
+      continue;
+    }
     bool placed = false;
-    for (double s = 0.5 * rf; s >= rf / 16.0 && !placed; s *= 0.5) {
+    for (double s = 0.25 * rf; s >= rf / 16.0 && !placed; s *= 0.5) {
       xi = x[i];
       placed = projectOut(xi, s, 4);
     }
     if (placed) {
       x[i] = xi;
-      continue;
+    } else {
+      ++stuck;
+      x[i] = out;
     }
-    // No room between them (the gap is closed): out of the gap, sideways.
-    xi = x[i];
-    if (!escape(xi)) ++stuck;
-    x[i] = xi;
   }
   return stuck;
 }
