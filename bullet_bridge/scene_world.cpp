@@ -39,6 +39,11 @@ SceneWorld::SceneWorld(const SimulationSettings& sim, const std::vector<BodySpec
     throw std::invalid_argument("SceneWorld: settings.bodies must be empty (bodies come as specs)");
   btDiscreteDynamicsWorld& world = bullet_->world;
   world.setGravity(toBt(sim.gravity));
+  // Bodies' overlaps are undone by moving them apart (split impulse), not by giving them
+  // velocity (Bullet's default below 4 cm of overlap): a body held by fluid pressed
+  // against the floor, with another body resting on it, must not throw that one off.
+  world.getSolverInfo().m_splitImpulse = 1;
+  world.getSolverInfo().m_splitImpulsePenetrationThreshold = 0;
   CoupledWorldSettings cs;
   cs.fluid = sim.fluid;
   cs.method = sim.method;

@@ -157,12 +157,13 @@ class Boundaries {
   /// projections on the bodies' tangent planes, contacts found again after each pass, so
   /// corners and several bodies are handled together). A particle squeezed between bodies
   /// closer than its diameter cannot have r_f from all of them: it is treated as one chain
-  /// with all its boundaries, and placed where the clearance is largest that all of them
-  /// allow (r_f / 2, r_f / 4, ... r_f / 16), never pushed out of one body into another or
-  /// through a wall. Where the bodies touch and no such point is near (a gap closed, a
-  /// body moved onto fluid by user code), the particle moves to the nearest point that has
-  /// r_f / 2 of clearance, found by a search over 26 directions out to eight spacings along
-  /// paths that do not cross a body: squeezed fluid goes sideways, out of the gap.
+  /// with all its boundaries. In a gap of at least r_f it stays between them, r_f / 2 from
+  /// each. In a thinner or closed gap (bodies touching, a body moved onto fluid by user
+  /// code) it moves to the nearest point with r_f / 2 from every body, found by a search
+  /// over 26 directions out to eight spacings along paths that neither cross a static body
+  /// nor go deeper into any body: squeezed fluid goes sideways, out of the gap, never
+  /// through a wall. Only where no such point is near, it stays between them as far from
+  /// both as they allow (r_f / 4 ... r_f / 16).
   /// Particles flagged in `candidates` and particles near a moving body are looked at:
   /// with static bodies, a particle without a contact at its predicted position x* has
   /// none at its final one (uncontrolled particles end exactly at x*). Returns the number
@@ -217,9 +218,9 @@ class Boundaries {
   /// Gauss-Seidel projections of y to clearance s from every body in contact, at most
   /// `passes` passes. True when y ends with clearance >= s (to a tolerance).
   bool projectOut(Vec3& y, double s, int passes) const;
-  /// Moves x to the nearest point with clearance >= r_f / 2 reachable without crossing a
-  /// body (see correctPositions). False when there is none within eight spacings: then x
-  /// moves to the point of most clearance found, if that is more than it has now.
+  /// Moves x to the nearest point where it can have r_f / 2 from every body, reachable
+  /// without crossing a body (see correctPositions). False when there is none within eight
+  /// spacings: then x moves to the point of most clearance found, if more than it has now.
   bool escape(Vec3& x) const;
 
   /// Sorts samples into `set` over `box` and computes their volumes.
