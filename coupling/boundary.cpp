@@ -752,31 +752,21 @@ std::size_t Boundaries::correctPositions(std::vector<Vec3>& x,
       x[i] = xi;
       continue;
     }
-    // Squeezed: bodies closer than a diameter. Half the radius from each, when there is
-    // room for it (a gap of at least one radius), at a raised density.
-    xi = x[i];
-    if (projectOut(xi, 0.5 * rf, 4)) {
-      x[i] = xi;
-      continue;
-    }
-    // A thinner gap (or a closed one): out of it, sideways, as a film too thin for a
-    // particle drains. Only where no way out is near, the most clearance the bodies allow.
-    Vec3 out = x[i];
-    if (escape(out)) {
-      x[i] = out;
-      continue;
-    }
+    // Squeezed: bodies closer than a diameter. The largest clearance they all allow
+    // (r_f / 2 ... r_f / 16), between them at a raised density.
     bool placed = false;
-    for (double s = 0.25 * rf; s >= rf / 16.0 && !placed; s *= 0.5) {
+    for (double s = 0.5 * rf; s >= rf / 16.0 && !placed; s *= 0.5) {
       xi = x[i];
       placed = projectOut(xi, s, 4);
     }
     if (placed) {
       x[i] = xi;
-    } else {
-      ++stuck;
-      x[i] = out;
+      continue;
     }
+    // No room between them (the gap is closed): out of it, sideways.
+    xi = x[i];
+    if (!escape(xi)) ++stuck;
+    x[i] = xi;
   }
   return stuck;
 }

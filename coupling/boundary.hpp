@@ -157,13 +157,14 @@ class Boundaries {
   /// projections on the bodies' tangent planes, contacts found again after each pass, so
   /// corners and several bodies are handled together). A particle squeezed between bodies
   /// closer than its diameter cannot have r_f from all of them: it is treated as one chain
-  /// with all its boundaries. In a gap of at least r_f it stays between them, r_f / 2 from
-  /// each. In a thinner or closed gap (bodies touching, a body moved onto fluid by user
-  /// code) it moves to the nearest point with r_f / 2 from every body, found by a search
-  /// over 26 directions out to eight spacings along paths that neither cross a static body
-  /// nor go deeper into any body: squeezed fluid goes sideways, out of the gap, never
-  /// through a wall. Only where no such point is near, it stays between them as far from
-  /// both as they allow (r_f / 4 ... r_f / 16).
+  /// with all its boundaries and placed where the clearance is largest that all of them
+  /// allow (r_f / 2, r_f / 4, ... r_f / 16), between them at a raised density, never pushed
+  /// out of one body into another or through a wall. Where the bodies touch (a gap closed,
+  /// a body moved onto fluid by user code) there is no room between them: the particle
+  /// moves to the nearest point with r_f / 2 from every body, found by a search over 26
+  /// directions out to eight spacings along paths that neither cross a static body nor go
+  /// deeper into any body: squeezed fluid goes sideways, out of the gap, never through a
+  /// wall.
   /// Particles flagged in `candidates` and particles near a moving body are looked at:
   /// with static bodies, a particle without a contact at its predicted position x* has
   /// none at its final one (uncontrolled particles end exactly at x*). Returns the number

@@ -18,7 +18,7 @@ declare -A still=(
   [stone_skipping]=0.2 [stone_skipping_local]=0.2 [impact]=0.1 [slip_ramp]=0.3
   [buoyancy]=1.2 [drag_low]=0.6 [drag_high]=0.6 [sinking_ship]=1.5
   [sinking_ship_penalty]=1.5 [vessel]=1.0 [flotsam]=0.7 [dam_break]=0.5 [floating_box]=1.0
-  [honey_and_water]=0.3 [squeeze]=0.22
+  [honey_and_water]=0.3 [squeeze]=0.2
 )
 # Camera per scene (default --view iso); --section cuts the fluid open so that bodies
 # under water show.
