@@ -141,9 +141,9 @@ void Boundaries::buildSet(SampleSet& set, const Aabb& box, const std::vector<Vec
   }
 }
 
-void Boundaries::markInterior(SampleSet& set, const Body* moving) {
-  // A cell beyond contact reach of every sample is wholly inside or wholly outside each
-  // body (a surface passes within a spacing of its samples): its centre tells which.
+void Boundaries::markInterior(SampleSet& set, const Body& body) {
+  // A cell beyond contact reach of every sample is wholly inside or wholly outside the
+  // body (its surface passes within a spacing of its samples): its centre tells which.
   const Eigen::Vector3i dims = set.grid.dims();
   const std::int64_t cells = static_cast<std::int64_t>(set.grid.cellCount());
 #pragma omp parallel for schedule(static)
@@ -152,21 +152,8 @@ void Boundaries::markInterior(SampleSet& set, const Body* moving) {
     const Eigen::Vector3i coord(static_cast<int>(c % dims[0]),
                                 static_cast<int>((c / dims[0]) % dims[1]),
                                 static_cast<int>(c / (std::int64_t(dims[0]) * dims[1])));
-    const Vec3 centre = set.grid.cellCenter(coord);
-    bool inside = false;
-    if (moving) {
-      inside = moving->settings.shape->signedDistance(centre) < 0.0;
-    } else {
-      for (const std::uint32_t bi : static_bodies_) {
-        const Body& b = bodies_[bi];
-        if (b.world_bounds.contains(centre) &&
-            b.settings.shape->signedDistance(b.settings.pose.toBody(centre)) < 0.0) {
-          inside = true;
-          break;
-        }
-      }
-    }
-    if (inside) set.near[c] |= kInterior;
+    if (body.settings.shape->signedDistance(set.grid.cellCenter(coord)) < 0.0)
+      set.near[c] |= kInterior;
   }
 }
 
@@ -188,10 +175,10 @@ void Boundaries::finalize() {
   }
   for (std::size_t bi = 0; bi < bodies_.size(); ++bi)
     if (!bodies_[bi].settings.moves()) static_bodies_.push_back(static_cast<std::uint32_t>(bi));
-  if (!pos.empty()) {
-    buildSet(static_, domain_, pos, nrm, owner, /*flags=*/true);
-    markInterior(static_, nullptr);
-  }
+  // Static bodies' interiors are not marked: fluid cannot be moved into them (it starts
+  // outside, and no correction sends it through a wall), and a domain-wide grid would
+  // evaluate every static shape (meshes too) at every cell inside it.
+  if (!pos.empty()) buildSet(static_, domain_, pos, nrm, owner, /*flags=*/true);
   // Moving bodies: one body-space set each.
   for (std::size_t bi = 0; bi < bodies_.size(); ++bi) {
     Body& b = bodies_[bi];
@@ -204,7 +191,7 @@ void Boundaries::finalize() {
     if (!box.empty()) {
       buildSet(m.samples, box, b.local.position, b.local.normal,
                std::vector<std::uint32_t>(b.local.size(), m.body), /*flags=*/true);
-      markInterior(m.samples, &b);
+      markInterior(m.samples, b);
     }
     b.local.clear();
     b.moving = static_cast<std::int32_t>(moving_.size());
@@ -536,8 +523,7 @@ std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxCont
       if (out[q].distance > out[far].distance) far = q;
     if (d < out[far].distance) out[far].body = body, out[far].distance = d;
   };
-  if (!static_.position.empty() &&
-      (static_.near[static_.grid.cellIndex(x)] & (kNearContact | kInterior))) {
+  if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
     for (const std::uint32_t bi : static_bodies_) {
       const Body& b = bodies_[bi];
       if (b.contact_bounds.contains(x))
@@ -636,8 +622,7 @@ bool Boundaries::contactGeometry(const Vec3& x, Contact& ct) const {
 
 double Boundaries::clearance(const Vec3& x, bool static_only) const {
   double best = radius_;
-  if (!static_.position.empty() &&
-      (static_.near[static_.grid.cellIndex(x)] & (kNearContact | kInterior))) {
+  if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
     for (const std::uint32_t bi : static_bodies_) {
       const Body& b = bodies_[bi];
       if (b.contact_bounds.contains(x))

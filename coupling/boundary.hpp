@@ -208,11 +208,12 @@ class Boundaries {
     Aabb world_reach;  ///< samples' bounds at the current pose, grown by the support
   };
   /// Bit 1: a sample within the kernel support may exist; bit 2: within contact reach;
-  /// bit 4: the cell lies inside a body, beyond contact reach of its surface.
+  /// bit 4 (moving bodies): the cell lies inside the body, beyond contact reach of its
+  /// surface.
   static constexpr std::uint8_t kNearDensity = 1, kNearContact = 2, kInterior = 4;
-  /// Sets kInterior on the cells of `set` that are not near its samples and whose centre
-  /// is inside a body: the set's static bodies, or `moving` (body space).
-  void markInterior(SampleSet& set, const Body* moving);
+  /// Sets kInterior on the cells of a moving body's `set` (body space) that are not near
+  /// its samples and whose centre is inside the body.
+  void markInterior(SampleSet& set, const Body& body);
   /// min(r_f, signed distance of x to the nearest body surface within contact reach);
   /// static bodies only when asked.
   double clearance(const Vec3& x, bool static_only) const;
