@@ -107,8 +107,8 @@ TEST(Hydrostatic, StillWaterInATankThatDoesNotFitTheLatticeStaysCalm) {
   // earlier wall pressure, estimated from the walls' shape, shot the corner particles out
   // at 2.5 m/s in the first 2 ms and some over the rim later).
   const double r = 0.004;
-  SimulationSettings s = tankScene(Vec3(0.108, 0.3, 0.109),
-                                   {Vec3::Zero(), Vec3(0.108, 0.07, 0.109), Vec3::Zero()}, r);
+  SimulationSettings s =
+      tankScene(Vec3(0.108, 0.3, 0.109), {Vec3::Zero(), Vec3(0.108, 0.07, 0.109), Vec3::Zero()}, r);
   Simulation sim(s);
   double fastest = 0.0;
   for (double t = 0.002; t < 0.02 + 1e-9; t += 0.002) {
