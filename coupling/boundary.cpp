@@ -501,6 +501,26 @@ void Boundaries::forEachSampleNear(const Vec3& x, F&& f) const {
   }
 }
 
+template <class F>
+void Boundaries::forEachBodyDistance(const Vec3& x, F&& f) const {
+  if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
+    for (const std::uint32_t bi : static_bodies_) {
+      const Body& b = bodies_[bi];
+      if (b.contact_bounds.contains(x))
+        f(bi, true, b.settings.shape->signedDistance(b.settings.pose.toBody(x)));
+    }
+  }
+  if (!moving_reach_.contains(x)) return;
+  for (const MovingBody& m : moving_) {
+    if (!m.world_reach.contains(x)) continue;
+    const Body& b = bodies_[m.body];
+    const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
+    if (m.samples.reach_box.contains(p) &&
+        (m.samples.near[m.samples.grid.cellIndex(p)] & (kNearContact | kInterior)))
+      f(m.body, false, b.settings.shape->signedDistance(p));
+  }
+}
+
 std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxContacts>& out) const {
   // A body is in contact when x is closer than the fluid radius to its exact surface: the
   // same test as the position correction and the penetration count, so that velocity
@@ -523,24 +543,7 @@ std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxCont
       if (out[q].distance > out[far].distance) far = q;
     if (d < out[far].distance) out[far].body = body, out[far].distance = d;
   };
-  if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
-    for (const std::uint32_t bi : static_bodies_) {
-      const Body& b = bodies_[bi];
-      if (b.contact_bounds.contains(x))
-        offer(bi, b.settings.shape->signedDistance(b.settings.pose.toBody(x)));
-    }
-  }
-  if (moving_reach_.contains(x)) {
-    for (const MovingBody& m : moving_) {
-      if (!m.world_reach.contains(x)) continue;
-      const Body& b = bodies_[m.body];
-      const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
-      if (!m.samples.reach_box.contains(p) ||
-          !(m.samples.near[m.samples.grid.cellIndex(p)] & (kNearContact | kInterior)))
-        continue;
-      offer(m.body, b.settings.shape->signedDistance(p));
-    }
-  }
+  forEachBodyDistance(x, [&](std::uint32_t body, bool, double d) { offer(body, d); });
   if (count == 0) return 0;
   std::sort(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(count),
             [](const Contact& a, const Contact& b) {
@@ -620,26 +623,13 @@ bool Boundaries::contactGeometry(const Vec3& x, Contact& ct) const {
   return true;
 }
 
-double Boundaries::clearance(const Vec3& x, bool static_only) const {
-  double best = radius_;
-  if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
-    for (const std::uint32_t bi : static_bodies_) {
-      const Body& b = bodies_[bi];
-      if (b.contact_bounds.contains(x))
-        best = std::min(best, b.settings.shape->signedDistance(b.settings.pose.toBody(x)));
-    }
-  }
-  if (!static_only && moving_reach_.contains(x)) {
-    for (const MovingBody& m : moving_) {
-      if (!m.world_reach.contains(x)) continue;
-      const Body& b = bodies_[m.body];
-      const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
-      if (m.samples.reach_box.contains(p) &&
-          (m.samples.near[m.samples.grid.cellIndex(p)] & (kNearContact | kInterior)))
-        best = std::min(best, b.settings.shape->signedDistance(p));
-    }
-  }
-  return best;
+Boundaries::Clearance Boundaries::clearance(const Vec3& x) const {
+  Clearance c{radius_, radius_};
+  forEachBodyDistance(x, [&](std::uint32_t, bool is_static, double d) {
+    c.all = std::min(c.all, d);
+    if (is_static) c.walls = std::min(c.walls, d);
+  });
+  return c;
 }
 
 bool Boundaries::projectOut(Vec3& y, double s, int passes) const {
@@ -657,7 +647,7 @@ bool Boundaries::projectOut(Vec3& y, double s, int passes) const {
     }
     if (!moved) return true;
   }
-  return clearance(y, false) >= s - tolerance;
+  return clearance(y).all >= s - tolerance;
 }
 
 namespace {
@@ -685,9 +675,10 @@ bool Boundaries::escape(Vec3& x) const {
   // into a body than the particle is now (less half a radius), nor into a static body at
   // all: fluid leaves a closed or too thin gap sideways, never through a wall or a body.
   const double rf = radius_;
-  const double now = clearance(x, false);
+  const Clearance start = clearance(x);
+  const double now = start.all;
   const double depth_limit = std::min(now, 0.0) - 0.5 * rf;
-  const double static_limit = std::min(clearance(x, true), 0.0) - 0.5 * rf;
+  const double static_limit = std::min(start.walls, 0.0) - 0.5 * rf;
   const double step = 0.5 * rf;
   const int rings = 32;   // 16 r_f = 8 spacings
   double progress = now;  // most clearance reached on an open path (if none has room)
@@ -697,12 +688,13 @@ bool Boundaries::escape(Vec3& x) const {
     Vec3 chosen = x;
     for (const Vec3& u : cubeDirections()) {
       const Vec3 y = x + (ring * step) * u;
-      const double c = clearance(y, false);
-      if (c <= now || clearance(y, true) < static_limit) continue;
+      const Clearance at = clearance(y);
+      const double c = at.all;
+      if (c <= now || at.walls < static_limit) continue;
       bool open = true;
       for (int k = 1; k < ring && open; ++k) {
-        const Vec3 q = x + (k * step) * u;
-        open = clearance(q, false) >= depth_limit && clearance(q, true) >= static_limit;
+        const Clearance q = clearance(x + (k * step) * u);
+        open = q.all >= depth_limit && q.walls >= static_limit;
       }
       if (!open) continue;
       if (c > progress) progress = c, farthest = y;

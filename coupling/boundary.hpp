@@ -214,9 +214,17 @@ class Boundaries {
   /// Sets kInterior on the cells of a moving body's `set` (body space) that are not near
   /// its samples and whose centre is inside the body.
   void markInterior(SampleSet& set, const Body& body);
-  /// min(r_f, signed distance of x to the nearest body surface within contact reach);
-  /// static bodies only when asked.
-  double clearance(const Vec3& x, bool static_only) const;
+  /// Calls f(body, is_static, signed distance of x to its exact surface) for every body
+  /// whose surface may be within contact reach of x (or, moving bodies, that x may be
+  /// deep inside): what findContacts and clearance look at.
+  template <class F>
+  void forEachBodyDistance(const Vec3& x, F&& f) const;
+  /// min(r_f, signed distance of x to the nearest body surface within contact reach): over
+  /// all bodies, and over the static ones only.
+  struct Clearance {
+    double all, walls;
+  };
+  Clearance clearance(const Vec3& x) const;
   /// Gauss-Seidel projections of y to clearance s from every body in contact, at most
   /// `passes` passes. True when y ends with clearance >= s (to a tolerance).
   bool projectOut(Vec3& y, double s, int passes) const;
