@@ -189,13 +189,9 @@ void CoupledWorld::setKinematicVelocity(btRigidBody* body, const Vec3& linear,
 void CoupledWorld::start() {
   if (sim_) return;
   SimulationSettings s;
+  static_cast<SolverSettings&>(s) = settings_;
   s.gravity = toVec(world_.getGravity());
-  s.fluid = settings_.fluid;
   s.blocks = blocks_;
-  s.method = settings_.method;
-  s.cfl = settings_.cfl;
-  s.max_dt = settings_.max_dt;
-  s.domain = settings_.domain;
   for (std::size_t b = 0; b < bodies_.size(); ++b) {
     const btRigidBody& body = *bodies_[b];
     BodySettings bs;

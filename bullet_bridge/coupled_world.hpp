@@ -39,13 +39,9 @@ class btRigidBody;
 
 namespace wake {
 
-struct CoupledWorldSettings {
-  FluidParams fluid;  ///< speed_of_sound <= 0 means automatic
-  CouplingMethod method = CouplingMethod::Local;
-  double cfl = 0.4;      ///< CFL number, in (0, 1]
-  double max_dt = 1e-3;  ///< s, largest sub-step
-  Aabb domain;           ///< fluid leaving it is removed; empty = automatic
-};
+/// The solver's settings (coupling/simulation.hpp): the same fields and defaults as a
+/// scene file's. Gravity comes from the Bullet world.
+using CoupledWorldSettings = SolverSettings;
 
 /// How one Bullet body meets the fluid.
 struct BodyCoupling {
@@ -82,6 +78,10 @@ class CoupledWorld {
   /// Builds the fluid and the boundary samples (done by the first advance()).
   void start();
   /// Advances fluid and bodies by `frame_time` (s, >= 0); returns the sub-steps taken.
+  /// Throws HealthError (coupling/simulation.hpp) when the fluid's health check fails
+  /// after a sub-step: a non-finite position or velocity, or a density ratio above
+  /// settings.health.max_density_ratio. The message names the step, the time, the
+  /// particle and what to change; later calls throw the same error.
   std::size_t advance(double frame_time);
   /// Advances fluid and bodies to time `t` (s); returns the sub-steps taken.
   std::size_t advanceTo(double t);

@@ -44,13 +44,7 @@ SceneWorld::SceneWorld(const SimulationSettings& sim, const std::vector<BodySpec
   // against the floor, with another body resting on it, must not throw that one off.
   world.getSolverInfo().m_splitImpulse = 1;
   world.getSolverInfo().m_splitImpulsePenetrationThreshold = 0;
-  CoupledWorldSettings cs;
-  cs.fluid = sim.fluid;
-  cs.method = sim.method;
-  cs.cfl = sim.cfl;
-  cs.max_dt = sim.max_dt;
-  cs.domain = sim.domain;
-  coupled_ = std::make_unique<CoupledWorld>(world, cs);
+  coupled_ = std::make_unique<CoupledWorld>(world, static_cast<const SolverSettings&>(sim));
   for (const FluidBlock& b : sim.blocks)
     coupled_->addFluidBlock(b);
 

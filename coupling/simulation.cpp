@@ -81,6 +81,8 @@ void validate(const SimulationSettings& s) {
   }
   require(std::isfinite(s.penalty_strength) && s.penalty_strength >= 0, "coupling.penalty_strength",
           "must be > 0 or automatic");
+  require(std::isfinite(s.health.max_density_ratio) && s.health.max_density_ratio > 1,
+          "health.max_density_ratio", "must be > 1");
 }
 
 }  // namespace
@@ -210,14 +212,47 @@ void Simulation::removeOutsideDomain() {
   const std::size_t n = st.size();
   flags_.assign(n, 0);
   std::size_t out = 0;
+  bool non_finite = false;
   for (std::size_t i = 0; i < n; ++i) {
-    const bool bad = !settings_.domain.contains(st.position[i]) || !finite(st.position[i]);
-    flags_[i] = bad;
-    out += bad;
+    // A NaN position is not "outside": it stops the run (the user's code may have set it).
+    if (!finite(st.position[i])) {
+      non_finite = true;
+      continue;
+    }
+    const bool outside = !settings_.domain.contains(st.position[i]);
+    flags_[i] = outside;
+    out += outside;
   }
+  if (non_finite)
+    fail(checkFluidHealth(st, settings_.fluid.rest_density, settings_.health.max_density_ratio));
   if (out == 0) return;
   st.removeIf(flags_);
   lost_ += out;
+}
+
+void Simulation::fail(const FluidHealth& health) {
+  const FluidState& st = fluid_->state();
+  const FluidParams& f = settings_.fluid;
+  const std::size_t i = health.slot;
+  const Vec3 x = st.position[i];
+  std::ostringstream m;
+  m << "step " << steps_ << " (t = " << time_ << " s): fluid particle " << st.id[i] << " at ("
+    << x.x() << ", " << x.y() << ", " << x.z() << ") m has "
+    << describeProblem(health, st, f.rest_density);
+  if (health.problem == FluidHealth::Problem::DensityRatio) {
+    m << ", above health.max_density_ratio = " << settings_.health.max_density_ratio
+      << ": the fluid is compressed far more than a weakly compressible fluid may be; raise "
+         "fluid.speed_of_sound (now "
+      << f.speed_of_sound
+      << " m/s; \"auto\" picks one for the scene), or raise health.max_density_ratio if such "
+         "a density is expected";
+  } else {
+    m << ": the step became unstable; lower time.cfl (now " << settings_.cfl
+      << ") or time.max_dt (now " << settings_.max_dt << " s), or raise fluid.speed_of_sound (now "
+      << f.speed_of_sound << " m/s)";
+  }
+  failure_.emplace(m.str(), steps_, time_, st.id[i], x);
+  throw *failure_;
 }
 
 void Simulation::placeBodies(const std::vector<RigidState>& states) {
@@ -252,6 +287,7 @@ double Simulation::chooseDt(double t_limit) const {
 }
 
 double Simulation::step(double t_limit) {
+  if (failure_) throw *failure_;
   if (!(t_limit > time_)) return 0.0;
   FluidState& st = fluid_->state();
 
@@ -358,12 +394,12 @@ double Simulation::step(double t_limit) {
   last_dt_ = dt;
   ++steps_;
 
-  // Health: density ratio and penetration against the exact shapes.
-  double rho_max = 0.0;
-#pragma omp parallel for reduction(max : rho_max) schedule(static)
-  for (std::int64_t i = 0; i < n; ++i)
-    rho_max = std::max(rho_max, st.density[i]);
-  const double ratio = rho_max / settings_.fluid.rest_density;
+  // Health: finite positions and velocities, the density ratio's limit; penetration
+  // against the exact shapes.
+  const FluidHealth health =
+      checkFluidHealth(st, settings_.fluid.rest_density, settings_.health.max_density_ratio);
+  if (!health.ok()) fail(health);
+  const double ratio = health.max_density_ratio;
   const std::size_t penetrating = countPenetrating();
   max_density_ratio_ = std::max(max_density_ratio_, ratio);
   max_penetrating_ = std::max(max_penetrating_, penetrating);

@@ -12,8 +12,11 @@
 #include "coupling/rigid_body.hpp"
 #include "coupling/shape.hpp"
 #include "sph/fluid.hpp"
+#include "sph/health.hpp"
 
 #include <memory>
+#include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -29,17 +32,56 @@ struct FluidBlock {
   double kinematic_viscosity = -1.0;
 };
 
-struct SimulationSettings {
-  Vec3 gravity = Vec3(0, -9.81, 0);  ///< m/s^2
-  FluidParams fluid;                 ///< speed_of_sound <= 0 means "auto"
-  std::vector<FluidBlock> blocks;
-  std::vector<BodySettings> bodies;
+/// Limits checked after every step. A run that breaks one stops with a HealthError.
+struct HealthLimits {
+  /// Largest density / rest density a particle may reach, > 1. A weakly compressible fluid
+  /// stays within a few percent of its rest density; far above it, the step is unstable
+  /// or the speed of sound too low for the scene.
+  double max_density_ratio = 3.0;
+};
+
+/// How the fluid is modelled and stepped: one set of settings (and defaults) for the scene
+/// loader, CoupledWorld and the benchmarks. SimulationSettings adds the scene's content.
+struct SolverSettings {
+  FluidParams fluid;  ///< speed_of_sound <= 0 means "auto"
   CouplingMethod method = CouplingMethod::Local;
   /// m^2/s^2, D of the penalty baseline (method Penalty); 0 = defaultPenaltyStrength(c).
   double penalty_strength = 0.0;
   double cfl = 0.4;      ///< lambda of the CFL condition, in (0, 1]
   double max_dt = 1e-3;  ///< s, upper bound of the time step, > 0
   Aabb domain;           ///< m; particles leaving it are lost; empty = automatic
+  HealthLimits health;
+};
+
+/// A whole scene: the solver's settings, gravity, the fluid's blocks and the bodies.
+struct SimulationSettings : SolverSettings {
+  Vec3 gravity = Vec3(0, -9.81, 0);  ///< m/s^2
+  std::vector<FluidBlock> blocks;
+  std::vector<BodySettings> bodies;
+};
+
+/// The run stopped because a health limit was broken (a non-finite position or velocity,
+/// a density ratio above HealthLimits::max_density_ratio). what() names the step, the
+/// time, the particle and what to change.
+class HealthError : public std::runtime_error {
+ public:
+  HealthError(const std::string& message, std::uint64_t step, double time, std::uint32_t particle,
+              const Vec3& position)
+      : std::runtime_error(message),
+        step_(step),
+        time_(time),
+        particle_(particle),
+        position_(position) {}
+  std::uint64_t step() const { return step_; }          ///< the step that broke the limit (1-based)
+  double time() const { return time_; }                 ///< s, at the end of that step
+  std::uint32_t particle() const { return particle_; }  ///< permanent id
+  const Vec3& position() const { return position_; }    ///< m, where it was (may be NaN)
+
+ private:
+  std::uint64_t step_;
+  double time_;
+  std::uint32_t particle_;
+  Vec3 position_;
 };
 
 /// One fluid frame, in permanent particle order (id ascending).
@@ -80,6 +122,10 @@ class Simulation {
   ~Simulation();
 
   /// Advances one time step (CFL-limited, never beyond `t_limit`); returns dt taken.
+  /// Checks the fluid's health after the step (and non-finite positions before it):
+  /// throws HealthError when a limit of settings().health is broken or a position or
+  /// velocity is not finite. The simulation then stays stopped: every later step()
+  /// throws the same error.
   double step(double t_limit);
   /// Steps until time() reaches t.
   void advanceTo(double t);
@@ -102,6 +148,8 @@ class Simulation {
   std::size_t fluidParticles() const { return fluid_->state().size(); }
   std::size_t boundaryParticles() const;
   std::size_t removedAtStart() const { return removed_at_start_; }
+  /// Fluid particles removed because they left the domain (never for a non-finite value:
+  /// that stops the run with a HealthError).
   std::size_t lostParticles() const { return lost_; }
   /// Most fluid particle centres strictly inside a body's exact shape after any step.
   std::size_t maxPenetrating() const { return max_penetrating_; }
@@ -125,6 +173,8 @@ class Simulation {
  private:
   double chooseDt(double t_limit) const;
   void removeOutsideDomain();
+  /// Throws HealthError for `health`'s problem (and remembers it: the run stays stopped).
+  [[noreturn]] void fail(const FluidHealth& health);
   /// Shows every moving body to the boundaries at the given states.
   void placeBodies(const std::vector<RigidState>& states);
 
@@ -152,6 +202,7 @@ class Simulation {
   std::vector<Vec3> wall_shear_;       // scratch: (n) the walls' viscous shear, m/s^2
   std::vector<Wrench> wall_reaction_;  // scratch: (bodies) its reaction on two-way bodies
   std::size_t last_contacts_ = 0;
+  std::optional<HealthError> failure_;  // the error that stopped the run
 };
 
 /// Resolves speed_of_sound "auto": 10 x the largest speed expected in the scene

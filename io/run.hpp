@@ -33,9 +33,6 @@ struct RunResult {
   std::string summary_path;        ///< DIR/summary.json
 };
 
-/// True when every position, velocity, density and pressure of `fluid` is finite.
-bool fluidIsFinite(const FluidSnapshot& fluid);
-
 /// Runs `scene` to its end time, writing frames at t = k / frame_rate (frame 0 at t = 0,
 /// the last at end_time). Throws SceneError when the settings or the output folder are
 /// unusable (before anything in the folder is touched), RunError when the run fails.

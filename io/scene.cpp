@@ -277,12 +277,21 @@ void checkName(const Where& at, const std::string& name) {
       at.fail("must not contain '/', '\\' or control characters (got \"" + name + "\")");
 }
 
+// Defaults of the scene's fields are the settings structs' own (one set of defaults).
+const SimulationSettings kDefaults{};
+
 void readTime(const ObjectReader& time, SceneFile& scene) {
   time.allowOnly({"end", "frame_rate", "cfl", "max_dt"});
   scene.end_time = time.number("end", kPositive);
   scene.frame_rate = time.number("frame_rate", 30.0, kPositive);
-  scene.sim.cfl = time.number("cfl", 0.4, Range{0.0, 1.0, true, false});
-  scene.sim.max_dt = time.number("max_dt", 1e-3, kPositive);
+  scene.sim.cfl = time.number("cfl", kDefaults.cfl, Range{0.0, 1.0, true, false});
+  scene.sim.max_dt = time.number("max_dt", kDefaults.max_dt, kPositive);
+}
+
+void readHealth(const ObjectReader& health, SimulationSettings& sim) {
+  health.allowOnly({"max_density_ratio"});
+  sim.health.max_density_ratio = health.number(
+      "max_density_ratio", kDefaults.health.max_density_ratio, Range{1.0, kInf, true, false});
 }
 
 void readFluid(const ObjectReader& fluid, SimulationSettings& sim) {
@@ -290,7 +299,8 @@ void readFluid(const ObjectReader& fluid, SimulationSettings& sim) {
                    "kinematic_viscosity", "smoothing_ratio", "blocks"});
   FluidParams& p = sim.fluid;
   p.particle_radius = fluid.number("particle_radius", kPositive);
-  p.rest_density = fluid.number("rest_density", 1000.0, kPositive);
+  const FluidParams defaults = kDefaults.fluid;
+  p.rest_density = fluid.number("rest_density", defaults.rest_density, kPositive);
   p.speed_of_sound = 0.0;  // "auto": resolved by the simulation
   if (const json* c = fluid.find("speed_of_sound"); c && !(c->is_string() && *c == "auto")) {
     if (c->is_string())
@@ -298,10 +308,11 @@ void readFluid(const ObjectReader& fluid, SimulationSettings& sim) {
           .fail("must be a number > 0 or \"auto\" (got " + formatJson(*c) + ")");
     p.speed_of_sound = toNumber(fluid.at("speed_of_sound"), *c, kPositive);
   }
-  p.viscosity = fluid.number("viscosity", 0.1, kNonNegative);
+  p.viscosity = fluid.number("viscosity", defaults.viscosity, kNonNegative);
   p.kinematic_viscosity =
-      fluid.number("kinematic_viscosity", FluidParams().kinematic_viscosity, kViscosityRange);
-  p.smoothing_ratio = fluid.number("smoothing_ratio", 1.0, Range{0.8, 2.0, false, false});
+      fluid.number("kinematic_viscosity", defaults.kinematic_viscosity, kViscosityRange);
+  p.smoothing_ratio =
+      fluid.number("smoothing_ratio", defaults.smoothing_ratio, Range{0.8, 2.0, false, false});
 
   const Where blocks_at = fluid.at("blocks");
   const json& blocks = requireArray(blocks_at, fluid.require("blocks"));
@@ -589,8 +600,8 @@ double estimateFluidParticles(const SimulationSettings& sim) {
 SceneFile parseScene(const std::string& json_text, const std::string& path) {
   const json root_json = parseJson(json_text, path);
   const ObjectReader root(Where{&path, ""}, root_json);
-  root.allowOnly(
-      {"name", "description", "gravity", "time", "fluid", "coupling", "domain", "bodies"});
+  root.allowOnly({"name", "description", "gravity", "time", "fluid", "coupling", "domain", "health",
+                  "bodies"});
 
   SceneFile scene;
   scene.path = path;
@@ -599,11 +610,12 @@ SceneFile parseScene(const std::string& json_text, const std::string& path) {
   checkName(root.find("name") ? root.at("name") : root.where(), scene.name);
   if (root.find("description")) root.string("description");
 
-  scene.sim.gravity = root.vec3("gravity", Vec3(0.0, -9.81, 0.0));
+  scene.sim.gravity = root.vec3("gravity", kDefaults.gravity);
   readTime(root.object("time"), scene);
   readFluid(root.object("fluid"), scene.sim);
   checkParticleCount(root.at("fluid").key("particle_radius"), scene.sim);
   if (const auto coupling = root.optionalObject("coupling")) readCoupling(*coupling, scene.sim);
+  if (const auto health = root.optionalObject("health")) readHealth(*health, scene.sim);
   if (const auto domain = root.optionalObject("domain")) {
     domain->allowOnly({"min", "max"});
     scene.sim.domain = domain->box("min", "max");

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -265,6 +266,46 @@ TEST_F(SmallDambreakRun, BadInputFailsAndLeavesEarlierOutputUntouched) {
   for (const auto& entry : fs::directory_iterator(outDir()))
     after[entry.path()] = readFile(entry.path());
   EXPECT_TRUE(before == after) << "earlier output changed";
+}
+
+TEST(WakeCli, UnstableRunExitsOneNamingTheParticleAndKeepsTheFramesBefore) {
+  // A speed of sound far too low: the fluid piles up beyond 3 x its rest density.
+  const TempDir dir;
+  json scene = json::parse(readFile(kScene));
+  scene["fluid"]["speed_of_sound"] = 0.05;
+  scene["time"]["end"] = 1.0;
+  const fs::path file = dir.path / "unstable.json";
+  std::ofstream(file) << scene.dump(2);
+  const fs::path out = dir.path / "out";
+  const CliResult r =
+      runWake("run \"" + file.string() + "\" --out \"" + out.string() + "\" --quiet", dir.path);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_EQ(lineCount(r.err), 1u) << r.err;
+  EXPECT_EQ(r.err.rfind("wake: error: ", 0), 0u) << r.err;
+  for (const char* says :
+       {"step ", "(t = ", "fluid particle ", "x rest density", "health.max_density_ratio = 3",
+        "fluid.speed_of_sound (now 0.05", "frames before are in"})
+    EXPECT_NE(r.err.find(says), std::string::npos) << says << "\n" << r.err;
+  EXPECT_FALSE(fs::exists(out / "small_dambreak.h5"));
+  EXPECT_FALSE(fs::exists(out / "summary.json"));
+
+  // Every frame written before the failure opens and holds finite values.
+  const fs::path partial = out / "small_dambreak.h5.partial";
+  const hid_t h5 = H5Fopen(partial.string().c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(h5, 0) << partial;
+  const std::size_t frames = linkCount(h5, "frames");
+  EXPECT_GE(frames, 2u);
+  EXPECT_NE(r.err.find("the " + std::to_string(frames) + " frames before"), std::string::npos)
+      << r.err;
+  for (std::size_t k = 0; k < frames; ++k) {
+    char name[48];
+    std::snprintf(name, sizeof(name), "frames/%06zu/position", k);
+    const std::vector<double> x = readDataset<double>(h5, name, H5T_NATIVE_DOUBLE);
+    EXPECT_FALSE(x.empty()) << name;
+    for (const double v : x)
+      ASSERT_TRUE(std::isfinite(v)) << name;
+  }
+  H5Fclose(h5);
 }
 
 // --- Command line without a run -----------------------------------------------------------

@@ -1,5 +1,5 @@
-// Runner pieces that the end-to-end test cannot reach: the health check and running
-// through the library API (no CLI) into a folder that is a file.
+// Runner pieces that the end-to-end test cannot reach: running through the library API
+// (no CLI) into a folder that is a file.
 #include "io/run.hpp"
 
 #include <gtest/gtest.h>
@@ -14,35 +14,6 @@ namespace wake {
 namespace {
 
 namespace fs = std::filesystem;
-
-FluidSnapshot twoParticles() {
-  FluidSnapshot s;
-  s.id = {0, 1};
-  s.position = {Vec3(0, 0, 0), Vec3(0.02, 0, 0)};
-  s.velocity = {Vec3::Zero(), Vec3::Zero()};
-  s.density = {1000, 1000};
-  s.pressure = {0, 0};
-  return s;
-}
-
-TEST(RunHealth, NonFiniteValuesAreFound) {
-  EXPECT_TRUE(fluidIsFinite(twoParticles()));
-  EXPECT_TRUE(fluidIsFinite(FluidSnapshot{}));
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  const double inf = std::numeric_limits<double>::infinity();
-  FluidSnapshot s = twoParticles();
-  s.position[1].y() = nan;
-  EXPECT_FALSE(fluidIsFinite(s));
-  s = twoParticles();
-  s.velocity[0].z() = -inf;
-  EXPECT_FALSE(fluidIsFinite(s));
-  s = twoParticles();
-  s.density[1] = inf;
-  EXPECT_FALSE(fluidIsFinite(s));
-  s = twoParticles();
-  s.pressure[0] = nan;
-  EXPECT_FALSE(fluidIsFinite(s));
-}
 
 TEST(RunScene, OutputFolderThatIsAFileIsBadInput) {
   const SceneFile scene =

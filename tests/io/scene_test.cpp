@@ -19,6 +19,30 @@ namespace fs = std::filesystem;
 
 const std::string kScenes = std::string(WAKE_TEST_DATA_DIR) + "/scenes/";
 
+TEST(SceneLoader, DefaultsAreTheSettingsStructsOwn) {
+  // One set of defaults: a scene that gives only what is required gets exactly what the
+  // C++ API's default-constructed settings hold.
+  const SceneFile s = parseScene(R"({"time": {"end": 1},
+      "fluid": {"particle_radius": 0.01, "blocks": [{"min": [0, 0, 0], "max": [1, 1, 1]}]}})",
+                                 "minimal.json");
+  const SimulationSettings d;
+  EXPECT_EQ(s.sim.gravity, d.gravity);
+  EXPECT_EQ(s.sim.cfl, d.cfl);
+  EXPECT_EQ(s.sim.max_dt, d.max_dt);
+  EXPECT_EQ(s.sim.method, d.method);
+  EXPECT_EQ(s.sim.penalty_strength, d.penalty_strength);
+  EXPECT_EQ(s.sim.health.max_density_ratio, d.health.max_density_ratio);
+  EXPECT_EQ(s.sim.fluid.rest_density, d.fluid.rest_density);
+  EXPECT_EQ(s.sim.fluid.viscosity, d.fluid.viscosity);
+  EXPECT_EQ(s.sim.fluid.kinematic_viscosity, d.fluid.kinematic_viscosity);
+  EXPECT_EQ(s.sim.fluid.smoothing_ratio, d.fluid.smoothing_ratio);
+  EXPECT_EQ(s.sim.fluid.gamma, d.fluid.gamma);
+  const SceneFile h = parseScene(R"({"time": {"end": 1}, "health": {"max_density_ratio": 1.5},
+      "fluid": {"particle_radius": 0.01, "blocks": [{"min": [0, 0, 0], "max": [1, 1, 1]}]}})",
+                                 "limit.json");
+  EXPECT_EQ(h.sim.health.max_density_ratio, 1.5);
+}
+
 TEST(SceneLoader, SmallDambreak) {
   const SceneFile s = loadScene(kScenes + "small_dambreak.json");
   EXPECT_EQ(s.name, "small_dambreak");
@@ -40,6 +64,7 @@ TEST(SceneLoader, SmallDambreak) {
   EXPECT_EQ(s.sim.blocks[0].max, Vec3(0.1, 0.2, 0.1));
   EXPECT_EQ(s.sim.method, CouplingMethod::Local);
   EXPECT_TRUE(s.sim.domain.empty());
+  EXPECT_DOUBLE_EQ(s.sim.health.max_density_ratio, 3.0);
   EXPECT_TRUE(s.sim.bodies.empty());  // the runner builds bodies from s.bodies
   ASSERT_EQ(s.bodies.size(), 1u);
   const BodySpec& tank = s.bodies[0];
@@ -639,6 +664,21 @@ const BadCase kBadCases[] = {
      },
      "bodies: ", "must be an array"},
     {"fluid not an object", [](json& s) { s["fluid"] = 3; }, "fluid: ", "must be an object"},
+    {"density limit at one",
+     [](json& s) {
+       s["health"] = {{"max_density_ratio", 1}};
+     },
+     "health.max_density_ratio: ", "> 1"},
+    {"density limit not a number",
+     [](json& s) {
+       s["health"] = {{"max_density_ratio", "high"}};
+     },
+     "health.max_density_ratio: ", "number"},
+    {"health unknown field",
+     [](json& s) {
+       s["health"] = {{"max_density", 4}};
+     },
+     "health.max_density: ", "unknown field"},
     {"scene name with a slash", [](json& s) { s["name"] = "../x"; }, "name: ", "'/'"},
 };
 
