@@ -1,7 +1,7 @@
 #include "bullet_bridge/bullet_shapes.hpp"
 #include "bullet_bridge/convert.hpp"
 
-#include "coupling/obj_reader.hpp"
+#include "geometry/obj_reader.hpp"
 
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 #include <LinearMath/btConvexHullComputer.h>

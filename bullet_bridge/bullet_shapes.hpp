@@ -1,7 +1,7 @@
 // Bullet collision shapes <-> Wake's exact shapes.
 //
 // exactShape() reads a btCollisionShape and returns the surface Bullet actually collides
-// with, margins included, as a Wake Shape (coupling/shape.hpp) that is sampled with
+// with, margins included, as a Wake Shape (geometry/shape.hpp) that is sampled with
 // boundary particles and used to count penetration:
 //   btBoxShape                 box of getHalfExtentsWithMargin() (the margin is inside)
 //   btSphereShape, btCapsule*  exact (the radius is the margin)
@@ -16,7 +16,7 @@
 #pragma once
 
 #include "bullet_bridge/body_spec.hpp"
-#include "coupling/shape.hpp"
+#include "geometry/shape.hpp"
 
 #include <memory>
 #include <vector>

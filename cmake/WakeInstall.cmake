@@ -70,9 +70,9 @@ function(wake_install_package)
 
   # A static library's PRIVATE dependencies are part of its link interface
   # ($<LINK_ONLY:...>), so the package config must find them as well.
-  # tinyobjloader (wake::coupling's OBJ reader) and stb (PNG output of wake::io's
+  # tinyobjloader (wake::geometry's OBJ reader) and stb (PNG output of wake::render's
   # renderer, found again from the hints below).
-  foreach(_need "wake_coupling;TINYOBJLOADER" "wake_io;STB")
+  foreach(_need "wake_geometry;TINYOBJLOADER" "wake_render;STB")
     list(GET _need 0 _target)
     list(GET _need 1 _what)
     get_target_property(_type ${_target} TYPE)

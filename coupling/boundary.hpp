@@ -1,7 +1,7 @@
 // Boundary particles of all bodies (DESIGN.md §3-4): sampling, the fluid's density share,
 // contacts, position correction and penetration counts.
 //
-// Every body's surface is sampled once in body space (coupling/shape.hpp). Static bodies'
+// Every body's surface is sampled once in body space (geometry/shape.hpp). Static bodies'
 // samples are placed in the world once, in flat arrays sorted by grid cell. A moving
 // (kinematic or dynamic) body keeps its samples in body space, sorted in its own grid;
 // a query transforms the fluid position into the body's frame, so moving a body costs
@@ -12,7 +12,7 @@
 #pragma once
 
 #include "coupling/rigid_body.hpp"
-#include "coupling/shape.hpp"
+#include "geometry/shape.hpp"
 #include "sph/fluid.hpp"
 
 #include <array>

@@ -10,7 +10,7 @@
 #include "coupling/direct_forcing.hpp"
 #include "coupling/penalty.hpp"
 #include "coupling/rigid_body.hpp"
-#include "coupling/shape.hpp"
+#include "geometry/shape.hpp"
 #include "sph/fluid.hpp"
 #include "sph/health.hpp"
 

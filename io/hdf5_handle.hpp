@@ -1,5 +1,5 @@
 // Small RAII helpers for HDF5's C API, shared by the writer (io/output.cpp) and the
-// renderer's reader (io/render.cpp).
+// renderer's reader (render/render.cpp).
 #pragma once
 
 #include <hdf5.h>

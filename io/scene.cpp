@@ -2,7 +2,7 @@
 // scene.hpp and io/SCENE_FORMAT.md for the format).
 #include "io/scene.hpp"
 
-#include "coupling/shape.hpp"
+#include "geometry/shape.hpp"
 
 #include <unistd.h>
 #include <nlohmann/json.hpp>

@@ -8,7 +8,7 @@
 // Exit status: 0 success, 2 bad input (scene, options), 1 a run that failed.
 // Every error is one line on stderr: "wake: error: <message>".
 #include "io/files.hpp"
-#include "io/render.hpp"
+#include "render/render.hpp"
 #include "io/run.hpp"
 #include "io/scene.hpp"
 

@@ -24,25 +24,6 @@ inline BodySettings staticBody(const std::string& name, std::shared_ptr<const Sh
   return b;
 }
 
-/// Total surface area of a sampling (m^2).
-inline double totalArea(const SurfaceSamples& s) {
-  double sum = 0.0;
-  for (double a : s.area)
-    sum += a;
-  return sum;
-}
-
-/// Central-difference gradient of the signed distance, not normalised: an independent
-/// check of shapes' distances (|grad| = 1) and normals.
-inline Vec3 rawGradient(const Shape& shape, const Vec3& p, double step) {
-  Vec3 g;
-  for (int a = 0; a < 3; ++a) {
-    const Vec3 d = step * Vec3::Unit(a);
-    g[a] = (shape.signedDistance(p + d) - shape.signedDistance(p - d)) / (2.0 * step);
-  }
-  return g;
-}
-
 /// A tank (cavity [0, size]) with one fluid block.
 inline SimulationSettings tankScene(const Vec3& tank_size, const FluidBlock& block,
                                     double particle_radius) {

@@ -7,8 +7,8 @@
 // number with the far-field dipole approximation of Barill et al. (2018, "Fast winding
 // numbers for soups and clouds", first order) and exact solid angles near the query point;
 // when that sum comes out near 1/2 it is redone exactly.  Lengths in m, areas in m^2.
-#include "coupling/obj_reader.hpp"
-#include "coupling/shape.hpp"
+#include "geometry/obj_reader.hpp"
+#include "geometry/shape.hpp"
 
 #include <algorithm>
 #include <array>

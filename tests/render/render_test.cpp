@@ -1,7 +1,7 @@
 // `wake render` and the body surfaces in the HDF5 output: a tiny tank with a floating box is
 // run into a temporary folder, its surfaces are read back and compared with the simulation's
 // boundary samples, and its frames are rendered and read back with stb_image.
-#include "io/render.hpp"
+#include "render/render.hpp"
 #include "bullet_bridge/scene_world.hpp"
 #include "io/run.hpp"
 

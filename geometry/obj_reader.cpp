@@ -1,4 +1,4 @@
-#include "coupling/obj_reader.hpp"
+#include "geometry/obj_reader.hpp"
 
 #include <tiny_obj_loader.h>
 

@@ -1,7 +1,7 @@
 // Analytic shapes: box, sphere, half space (plane) and open-top tank (DESIGN.md §3).
 //
 // Every distance and position here is in metres, in body space; areas in m^2.
-#include "coupling/shape.hpp"
+#include "geometry/shape.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 // Triangle meshes from memory (makeTriangleMesh): the BVH answers equal brute force.
-#include "coupling/shape.hpp"
+#include "geometry/shape.hpp"
 
 #include <gtest/gtest.h>
 

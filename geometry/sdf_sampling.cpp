@@ -24,7 +24,7 @@
 // step runs in a fixed order (parallel loops write per-item results only), so the result is
 // deterministic.  Memory: 30 to 60 candidates per sample, 28 bytes each.  Lengths in m,
 // areas in m^2.
-#include "coupling/shape.hpp"
+#include "geometry/shape.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -7,7 +7,7 @@
 // distance of (r, y) to the profile region.  Volumes and areas come from Steiner's formula
 // for the Minkowski sum with a ball; the surface is sampled ring by ring along the profile
 // curve (see sampleRevolution).  Lengths in m, areas in m^2, volumes in m^3.
-#include "coupling/shape.hpp"
+#include "geometry/shape.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
-// Exact shapes and their surface sampling (coupling/shape.hpp).
-#include "coupling/shape.hpp"
-#include "coupling/test_support.hpp"
+// Exact shapes and their surface sampling (geometry/shape.hpp).
+#include "geometry/shape.hpp"
+#include "geometry/geometry_test_support.hpp"
 
 #include <gtest/gtest.h>
 

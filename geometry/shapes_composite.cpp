@@ -8,7 +8,7 @@
 // the tests: the lens of two overlapping spheres within 1e-3 of the lens, a rounded box
 // within 2e-3); a face shared by two touching children counts nothing.  Each estimate is
 // computed once, on the first call of volume().  Lengths in m, areas in m^2, volumes in m^3.
-#include "coupling/shape.hpp"
+#include "geometry/shape.hpp"
 
 #include <algorithm>
 #include <cmath>

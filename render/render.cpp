@@ -1,5 +1,5 @@
 // Software preview renderer: HDF5 in (C API), PNG out (stb_image_write). See render.hpp.
-#include "io/render.hpp"
+#include "render/render.hpp"
 
 #include "io/hdf5_handle.hpp"
 
