@@ -3,7 +3,8 @@
 # package test: install, then build an outside project with find_package(Wake)); then
 # builds against double-precision Bullet (build-f64) and runs the Bullet and package tests
 # there; then runs the fast unit and end-to-end tests again under AddressSanitizer + UBSan.
-# WAKE_SKIP_BULLET_DOUBLE=1 skips the double-precision part, WAKE_SKIP_SANITIZERS=1 the last.
+# WAKE_SKIP_BULLET_DOUBLE=1 skips the double-precision part, WAKE_SKIP_SANITIZERS=1 the last;
+# WAKE_ALL_TESTS=1 also runs the tests labelled "slow" (not run by default, see below).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
@@ -12,7 +13,11 @@ BUILD_DIR=build bash scripts/build.sh
 # that way than one test at a time on every core (results are the same bits on any
 # number of threads).
 start=$SECONDS
-(cd build && OMP_NUM_THREADS=1 ctest --output-on-failure -j "$(nproc)" --timeout 1200)
+# Tests labelled "slow" repeat checks that faster tests already make (another coupling
+# method or density of the same physics); WAKE_ALL_TESTS=1 runs them too.
+exclude=(-LE slow)
+if [ "${WAKE_ALL_TESTS:-0}" = 1 ]; then exclude=(); fi
+(cd build && OMP_NUM_THREADS=1 ctest --output-on-failure -j "$(nproc)" --timeout 1200 "${exclude[@]}")
 echo "[wake] tests: $((SECONDS - start)) s"
 if [ "${WAKE_SKIP_BULLET_DOUBLE:-0}" != 1 ]; then
   # Only what the tests below need: the installed targets and the Bullet test program.
