@@ -56,21 +56,6 @@ inline Options parse(int argc, char** argv) {
   return o;
 }
 
-/// FNV-1a hash of the fluid's positions and velocities in id order.
-inline std::uint64_t stateHash(const Simulation& sim) {
-  FluidSnapshot snap;
-  sim.snapshot(snap);
-  std::uint64_t h = 1469598103934665603ull;
-  auto mix = [&](const void* data, std::size_t bytes) {
-    const unsigned char* p = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < bytes; ++i)
-      h = (h ^ p[i]) * 1099511628211ull;
-  };
-  mix(snap.position.data(), snap.position.size() * sizeof(Vec3));
-  mix(snap.velocity.data(), snap.velocity.size() * sizeof(Vec3));
-  return h;
-}
-
 /// Difference of two timings (after - before).
 inline StepTimings since(const StepTimings& after, const StepTimings& before) {
   StepTimings t = after;

@@ -104,6 +104,85 @@ class CoupledWorld::Bodies final : public RigidBodies {
     }
   }
 
+  /// Per body (kPerBody numbers): world and interpolation transforms (basis row by row,
+  /// then origin: Bullet's own numbers, no quaternion round trip), linear and angular
+  /// velocities and their interpolation copies, activation state, deactivation time, and
+  /// the kinematic velocities Wake moves a kinematic body with.
+  static constexpr std::size_t kPerBody = 12 + 12 + 12 + 2 + 6;
+
+  std::vector<double> saveState() const override {
+    std::vector<double> out;
+    out.reserve(kPerBody * count());
+    auto put = [&](const btVector3& v) {
+      for (int k = 0; k < 3; ++k)
+        out.push_back(double(v[k]));
+    };
+    auto putTransform = [&](const btTransform& t) {
+      for (int r = 0; r < 3; ++r)
+        put(t.getBasis()[r]);
+      put(t.getOrigin());
+    };
+    for (std::size_t b = 0; b < count(); ++b) {
+      const btRigidBody& body = *owner_.bodies_[b];
+      putTransform(body.getWorldTransform());
+      putTransform(body.getInterpolationWorldTransform());
+      put(body.getLinearVelocity());
+      put(body.getAngularVelocity());
+      put(body.getInterpolationLinearVelocity());
+      put(body.getInterpolationAngularVelocity());
+      out.push_back(double(body.getActivationState()));
+      out.push_back(double(body.getDeactivationTime()));
+      out.insert(out.end(), owner_.kinematic_linear_[b].data(),
+                 owner_.kinematic_linear_[b].data() + 3);
+      out.insert(out.end(), owner_.kinematic_angular_[b].data(),
+                 owner_.kinematic_angular_[b].data() + 3);
+    }
+    return out;
+  }
+
+  void loadState(const std::vector<double>& state) override {
+    if (state.size() != kPerBody * count())
+      throw std::invalid_argument("rigid-body state: " + std::to_string(state.size()) +
+                                  " numbers for " + std::to_string(count()) + " bodies (" +
+                                  std::to_string(kPerBody) + " each)");
+    const double* v = state.data();
+    auto get = [&]() {
+      const btVector3 out{btScalar(v[0]), btScalar(v[1]), btScalar(v[2])};
+      v += 3;
+      return out;
+    };
+    auto getTransform = [&]() {
+      const btVector3 r0 = get(), r1 = get(), r2 = get();
+      const btVector3 origin = get();
+      return btTransform(
+          btMatrix3x3(r0.x(), r0.y(), r0.z(), r1.x(), r1.y(), r1.z(), r2.x(), r2.y(), r2.z()),
+          origin);
+    };
+    for (std::size_t b = 0; b < count(); ++b) {
+      btRigidBody& body = *owner_.bodies_[b];
+      const btTransform world = getTransform(), interpolation = getTransform();
+      const btVector3 linear = get(), angular = get();
+      const btVector3 interpolation_linear = get(), interpolation_angular = get();
+      const int activation = static_cast<int>(v[0]);
+      const btScalar deactivation = btScalar(v[1]);
+      v += 2;
+      owner_.kinematic_linear_[b] = Vec3(v[0], v[1], v[2]);
+      owner_.kinematic_angular_[b] = Vec3(v[3], v[4], v[5]);
+      v += 6;
+      body.setLinearVelocity(linear);
+      body.setAngularVelocity(angular);
+      body.setCenterOfMassTransform(world);  // also updates the world inertia tensor
+      if (body.getMotionState()) body.getMotionState()->setWorldTransform(world);
+      body.setInterpolationWorldTransform(interpolation);
+      body.setInterpolationLinearVelocity(interpolation_linear);
+      body.setInterpolationAngularVelocity(interpolation_angular);
+      body.forceActivationState(activation);
+      body.setDeactivationTime(deactivation);
+      // Bullet's broadphase must see the bodies where they are now.
+      owner_.world_.updateSingleAabb(&body);
+    }
+  }
+
   void step(double dt, const std::vector<Wrench>& fluid) override {
     for (std::size_t b = 0; b < count(); ++b) {
       btRigidBody& body = *owner_.bodies_[b];

@@ -70,4 +70,42 @@ void SimpleRigidBodies::step(double dt, const std::vector<Wrench>& fluid) {
     bodies_[b].state = advance(bodies_[b], dt, fluid[b]).state;
 }
 
+std::vector<double> RigidBodies::saveState() const {
+  throw std::logic_error("this rigid-body integrator cannot be saved in a checkpoint");
+}
+
+void RigidBodies::loadState(const std::vector<double>&) {
+  throw std::logic_error("this rigid-body integrator cannot be restored from a checkpoint");
+}
+
+std::vector<double> SimpleRigidBodies::saveState() const {
+  std::vector<double> out;
+  out.reserve(13 * bodies_.size());
+  for (const RigidBodyInit& b : bodies_) {
+    const RigidState& s = b.state;
+    out.insert(out.end(), s.pose.position.data(), s.pose.position.data() + 3);
+    out.insert(out.end(), s.pose.orientation.coeffs().data(),
+               s.pose.orientation.coeffs().data() + 4);
+    out.insert(out.end(), s.linear_velocity.data(), s.linear_velocity.data() + 3);
+    out.insert(out.end(), s.angular_velocity.data(), s.angular_velocity.data() + 3);
+  }
+  return out;
+}
+
+void SimpleRigidBodies::loadState(const std::vector<double>& state) {
+  if (state.size() != 13 * bodies_.size())
+    throw std::invalid_argument("rigid-body state: " + std::to_string(state.size()) +
+                                " numbers for " + std::to_string(bodies_.size()) +
+                                " bodies (13 each)");
+  const double* v = state.data();
+  for (RigidBodyInit& b : bodies_) {
+    RigidState& s = b.state;
+    s.pose.position = Vec3(v[0], v[1], v[2]);
+    s.pose.orientation.coeffs() = Eigen::Vector4d(v[3], v[4], v[5], v[6]);
+    s.linear_velocity = Vec3(v[7], v[8], v[9]);
+    s.angular_velocity = Vec3(v[10], v[11], v[12]);
+    v += 13;
+  }
+}
+
 }  // namespace wake

@@ -60,6 +60,13 @@ class RigidBodies {
   /// Applies `fluid[b]` to body b for this step only and advances every body by exactly
   /// `dt` (integration and body-body contact). `fluid` has count() entries.
   virtual void step(double dt, const std::vector<Wrench>& fluid) = 0;
+
+  /// Checkpoints: the integrator's whole changing state as numbers, enough to continue
+  /// the run bit for bit after loadState() on an integrator built the same way. The
+  /// default refuses (std::logic_error): an integrator that cannot be saved.
+  virtual std::vector<double> saveState() const;
+  /// Restores what saveState() gave. Throws std::invalid_argument when it does not fit.
+  virtual void loadState(const std::vector<double>& state);
 };
 
 /// Rigid body description for SimpleRigidBodies and for the coupling's own bookkeeping.
@@ -80,6 +87,9 @@ class SimpleRigidBodies final : public RigidBodies {
   RigidState state(std::size_t body) const override { return bodies_[body].state; }
   void predict(double dt, std::vector<RigidPrediction>& out) const override;
   void step(double dt, const std::vector<Wrench>& fluid) override;
+  /// 13 numbers per body: position, orientation (x y z w), linear, angular velocity.
+  std::vector<double> saveState() const override;
+  void loadState(const std::vector<double>& state) override;
 
  private:
   RigidPrediction advance(const RigidBodyInit& b, double dt, const Wrench& w) const;

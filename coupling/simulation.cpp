@@ -413,6 +413,55 @@ void Simulation::advanceTo(double t) {
     step(t);
 }
 
+SimulationState Simulation::saveState() const {
+  SimulationState s;
+  s.time = time_;
+  s.steps = steps_;
+  s.last_dt = last_dt_;
+  s.removed_at_start = removed_at_start_;
+  s.lost = lost_;
+  s.max_penetrating = max_penetrating_;
+  s.window_penetrating = window_penetrating_;
+  s.last_contacts = last_contacts_;
+  s.max_density_ratio = max_density_ratio_;
+  s.window_density_ratio = window_density_ratio_;
+  s.fluid = fluid_->state();
+  s.wrenches = wrench_;
+  s.rigid = rigid_->saveState();
+  return s;
+}
+
+void Simulation::restoreState(const SimulationState& s) {
+  const FluidState& f = s.fluid;
+  const std::size_t n = f.size();
+  const bool sizes_agree = f.velocity.size() == n && f.acceleration.size() == n &&
+                           f.density.size() == n && f.pressure.size() == n && f.id.size() == n &&
+                           f.kinematic_viscosity.size() == n;
+  require(sizes_agree, "state.fluid", "its arrays differ in length");
+  require(s.wrenches.size() == wrench_.size(), "state.wrenches",
+          "has " + std::to_string(s.wrenches.size()) + " bodies, the simulation " +
+              std::to_string(wrench_.size()));
+  require(std::isfinite(s.time) && s.time >= 0, "state.time", "must be finite and >= 0");
+  rigid_->loadState(s.rigid);
+  fluid_->state() = f;
+  time_ = s.time;
+  steps_ = s.steps;
+  last_dt_ = s.last_dt;
+  removed_at_start_ = s.removed_at_start;
+  lost_ = s.lost;
+  max_penetrating_ = s.max_penetrating;
+  window_penetrating_ = s.window_penetrating;
+  last_contacts_ = s.last_contacts;
+  max_density_ratio_ = s.max_density_ratio;
+  window_density_ratio_ = s.window_density_ratio;
+  wrench_ = s.wrenches;
+  failure_.reset();
+  // The boundaries see the bodies where the rigid-body side now has them.
+  for (std::size_t b = 0; b < body_now_.size(); ++b)
+    body_now_[b] = rigid_->state(b);
+  placeBodies(body_now_);
+}
+
 void Simulation::snapshot(FluidSnapshot& out) const {
   const FluidState& st = fluid_->state();
   const std::size_t n = st.size();
@@ -434,6 +483,20 @@ void Simulation::snapshot(FluidSnapshot& out) const {
     out.density[k] = st.density[i];
     out.pressure[k] = st.pressure[i];
   }
+}
+
+std::uint64_t stateHash(const Simulation& sim) {
+  FluidSnapshot snap;
+  sim.snapshot(snap);
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&](const void* data, std::size_t bytes) {
+    const unsigned char* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < bytes; ++i)
+      h = (h ^ p[i]) * 1099511628211ull;
+  };
+  mix(snap.position.data(), snap.position.size() * sizeof(Vec3));
+  mix(snap.velocity.data(), snap.velocity.size() * sizeof(Vec3));
+  return h;
 }
 
 std::vector<BodyState> Simulation::bodyStates() const {

@@ -100,6 +100,22 @@ struct BodyState {
   Vec3 angular_velocity = Vec3::Zero();  ///< rad/s
 };
 
+/// Everything of a run that changes from step to step (what a checkpoint holds): with a
+/// Simulation built again from the same settings, restoreState() continues the run bit
+/// for bit. The fluid's arrays are in the simulation's current slot order (not id order):
+/// the order decides the order of sums, so it is part of the state.
+struct SimulationState {
+  double time = 0;          ///< s
+  std::uint64_t steps = 0;  ///< steps taken
+  double last_dt = 0;       ///< s
+  std::uint64_t removed_at_start = 0, lost = 0, max_penetrating = 0, window_penetrating = 0;
+  std::uint64_t last_contacts = 0;
+  double max_density_ratio = 0, window_density_ratio = 0;
+  FluidState fluid;              ///< every per-particle array
+  std::vector<Wrench> wrenches;  ///< (bodies) the fluid's wrench in the last step
+  std::vector<double> rigid;     ///< RigidBodies::saveState()
+};
+
 /// Wall-clock seconds spent in each part of the step, summed over steps.
 /// `boundary` is all boundary-particle work: the density share plus `control` (contacts
 /// and velocity control) plus `correction` (position correction). `rigid` is the rigid
@@ -166,6 +182,13 @@ class Simulation {
   }
   double lastDt() const { return last_dt_; }
 
+  /// The run's changing state (checkpoints). Throws std::logic_error when the rigid-body
+  /// integrator cannot be saved.
+  SimulationState saveState() const;
+  /// Continues from `state`, saved by a Simulation built from the same settings and rigid
+  /// bodies. Throws std::invalid_argument when it does not fit them (counts, sizes).
+  void restoreState(const SimulationState& state);
+
   void snapshot(FluidSnapshot& out) const;
   std::vector<BodyState> bodyStates() const;
   const StepTimings& timings() const { return timings_; }
@@ -204,6 +227,10 @@ class Simulation {
   std::size_t last_contacts_ = 0;
   std::optional<HealthError> failure_;  // the error that stopped the run
 };
+
+/// FNV-1a hash of the fluid's positions and velocities in id order (the benchmarks' and
+/// summary.json's state_hash): equal hashes, equal states bit for bit.
+std::uint64_t stateHash(const Simulation& sim);
 
 /// Resolves speed_of_sound "auto": 10 x the largest speed expected in the scene
 /// (free fall over the scene's height, initial block and body speeds), so Mach < 0.1.

@@ -1,5 +1,8 @@
 #include "io/files.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -26,6 +29,16 @@ void writeFileAtomically(const std::string& path, const std::string& contents) {
     if (!out) throw std::runtime_error("cannot write " + tmp + ": " + std::strerror(errno));
   }
   renameFile(tmp, path);
+}
+
+void syncFile(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0 || ::fsync(fd) != 0) {
+    const std::string why = std::strerror(errno);
+    if (fd >= 0) ::close(fd);
+    throw std::runtime_error("cannot sync " + path + " to disk: " + why);
+  }
+  ::close(fd);
 }
 
 const char* wakeVersion() {

@@ -2,10 +2,11 @@
 #include "io/output.hpp"
 
 #include "io/files.hpp"
-#include "io/hdf5_handle.hpp"
+#include "io/hdf5_writer.hpp"
 #include "io/scene.hpp"
 
 #include <hdf5.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdint>
@@ -71,97 +72,12 @@ struct FrameEntry {
 
 }  // namespace
 
-struct FrameWriter::Impl {
+struct FrameWriter::Impl : hdf5::Writer {
   std::string h5_final, h5_partial, xdmf_final, xdmf_partial;
   Handle file, frames_group, bodies_group;
   std::vector<BodySeries> bodies;  // in the order of sim.bodyStates()
   std::vector<FrameEntry> entries;
   bool finished = false;
-
-  // Every HDF5 call goes through check(): a negative result becomes an exception naming
-  // the file and what was being done.
-  template <class Id>
-  Id check(Id result, const std::string& what) const {
-    if (result < 0) throw std::runtime_error("HDF5: cannot " + what + " in " + h5_partial);
-    return result;
-  }
-  Handle create(hid_t id, Handle::Closer close, const std::string& what) const {
-    return Handle(check(id, what), close);
-  }
-  Handle createGroup(hid_t parent, const std::string& name) const {
-    return create(H5Gcreate2(parent, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose,
-                  "create group " + name);
-  }
-
-  void writeAttribute(hid_t object, const char* name, const double* values, hsize_t n) const {
-    const Handle space = create(n == 1 ? H5Screate(H5S_SCALAR) : H5Screate_simple(1, &n, nullptr),
-                                H5Sclose, std::string("create dataspace for ") + name);
-    const Handle attr =
-        create(H5Acreate2(object, name, H5T_NATIVE_DOUBLE, space.get(), H5P_DEFAULT, H5P_DEFAULT),
-               H5Aclose, std::string("create attribute ") + name);
-    check(H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, values), std::string("write attribute ") + name);
-  }
-  void writeAttribute(hid_t object, const char* name, double value) const {
-    writeAttribute(object, name, &value, 1);
-  }
-  void writeAttribute(hid_t object, const char* name, const std::string& value) const {
-    const Handle type = create(H5Tcopy(H5T_C_S1), H5Tclose, "create string type");
-    check(H5Tset_size(type.get(), value.empty() ? 1 : value.size()), "set string size");
-    check(H5Tset_cset(type.get(), H5T_CSET_UTF8), "set string character set");
-    const Handle space = create(H5Screate(H5S_SCALAR), H5Sclose, "create dataspace");
-    const Handle attr =
-        create(H5Acreate2(object, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT),
-               H5Aclose, std::string("create attribute ") + name);
-    const std::string padded = value.empty() ? std::string(1, '\0') : value;
-    check(H5Awrite(attr.get(), type.get(), padded.data()), std::string("write attribute ") + name);
-  }
-
-  /// Writes a fixed-size dataset of `rows` x `cols` values (cols == 1: a 1-D dataset).
-  void writeDataset(hid_t group, const char* name, hid_t type, const void* data, hsize_t rows,
-                    hsize_t cols) const {
-    const hsize_t dims[2] = {rows, cols};
-    const Handle space =
-        create(H5Screate_simple(cols == 1 ? 1 : 2, dims, nullptr), H5Sclose, "create dataspace");
-    const Handle set =
-        create(H5Dcreate2(group, name, type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
-               H5Dclose, std::string("create dataset ") + name);
-    // HDF5 refuses a null buffer even for zero elements; an empty dataset needs no write.
-    if (rows > 0)
-      check(H5Dwrite(set.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data),
-            std::string("write dataset ") + name);
-  }
-
-  /// Creates an empty dataset of 0 x `cols` rows that grows by one row per frame.
-  Handle createSeries(hid_t group, const char* name, hsize_t cols) const {
-    const hsize_t dims[2] = {0, cols};
-    const hsize_t max_dims[2] = {H5S_UNLIMITED, cols};
-    const hsize_t chunk[2] = {256, cols};
-    const int rank = cols == 1 ? 1 : 2;
-    const Handle space =
-        create(H5Screate_simple(rank, dims, max_dims), H5Sclose, "create dataspace");
-    const Handle props = create(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "create properties");
-    check(H5Pset_chunk(props.get(), rank, chunk), "set chunk size");
-    return create(H5Dcreate2(group, name, H5T_NATIVE_DOUBLE, space.get(), H5P_DEFAULT, props.get(),
-                             H5P_DEFAULT),
-                  H5Dclose, std::string("create dataset ") + name);
-  }
-
-  /// Appends row `row` (the frame index) of `cols` doubles to a series.
-  void appendRow(const Handle& set, hsize_t row, const double* values, hsize_t cols) const {
-    const int rank = cols == 1 ? 1 : 2;
-    const hsize_t new_dims[2] = {row + 1, cols};
-    check(H5Dset_extent(set.get(), new_dims), "extend a body series");
-    const Handle file_space = create(H5Dget_space(set.get()), H5Sclose, "get dataspace");
-    const hsize_t start[2] = {row, 0};
-    const hsize_t count[2] = {1, cols};
-    check(H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr),
-          "select a row");
-    const Handle memory_space =
-        create(H5Screate_simple(rank, count, nullptr), H5Sclose, "create dataspace");
-    check(H5Dwrite(set.get(), H5T_NATIVE_DOUBLE, memory_space.get(), file_space.get(), H5P_DEFAULT,
-                   values),
-          "append to a body series");
-  }
 
   /// Each body's boundary samples in its body frame (surface_points, surface_normals) and
   /// its kind, from the samples at the current pose. Groups in the order of sim.bodyStates().
@@ -247,6 +163,7 @@ FrameWriter::FrameWriter(const std::string& out_dir, const SceneFile& scene, con
   const std::string stem = out_dir + "/" + scene.name;
   d.h5_final = stem + ".h5";
   d.h5_partial = d.h5_final + ".partial";
+  d.path = d.h5_partial;
   d.xdmf_final = stem + ".xdmf";
   d.xdmf_partial = d.xdmf_final + ".partial";
 
@@ -277,6 +194,75 @@ FrameWriter::FrameWriter(const std::string& out_dir, const SceneFile& scene, con
   }
   d.writeSurfaces(sim);
   d.check(H5Fflush(root, H5F_SCOPE_GLOBAL), "flush the file");
+}
+
+FrameWriter::FrameWriter(const std::string& out_dir, const SceneFile& scene, const Simulation& sim,
+                         std::size_t frames)
+    : impl_(std::make_unique<Impl>()) {
+  const QuietHdf5Errors quiet;
+  Impl& d = *impl_;
+  const std::string stem = out_dir + "/" + scene.name;
+  d.h5_final = stem + ".h5";
+  d.h5_partial = d.h5_final + ".partial";
+  d.xdmf_final = stem + ".xdmf";
+  d.xdmf_partial = d.xdmf_final + ".partial";
+  d.path = d.h5_partial;
+  if (::access(d.h5_partial.c_str(), R_OK | W_OK) != 0)
+    throw std::runtime_error("cannot resume: " + d.h5_partial + " is missing or not writable");
+  d.file =
+      d.create(H5Fopen(d.h5_partial.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), H5Fclose, "open the file");
+  d.frames_group = d.openGroup(d.file.get(), "frames");
+  d.bodies_group = d.openGroup(d.file.get(), "bodies");
+
+  // Frames 0 .. frames-1 stay; later ones (written after the checkpoint) go.
+  H5G_info_t info;
+  d.check(H5Gget_info(d.frames_group.get(), &info), "count the frames");
+  for (std::size_t k = 0; k < frames; ++k) {
+    const std::string name = frameName(k);
+    if (H5Lexists(d.frames_group.get(), name.c_str(), H5P_DEFAULT) <= 0)
+      throw std::runtime_error("cannot resume: " + d.h5_partial + " holds " +
+                               std::to_string(info.nlinks) + " frames, the checkpoint " +
+                               std::to_string(frames));
+    const Handle group = d.openGroup(d.frames_group.get(), name);
+    const double time = d.readAttribute<double>(group.get(), "time", H5T_NATIVE_DOUBLE);
+    const std::vector<std::uint32_t> id =
+        d.readDataset<std::uint32_t>(group.get(), "id", H5T_NATIVE_UINT32, 1);
+    d.entries.push_back(FrameEntry{k, time, id.size()});
+  }
+  for (std::size_t k = frames; k < frames + info.nlinks; ++k) {
+    const std::string name = frameName(k);
+    if (H5Lexists(d.frames_group.get(), name.c_str(), H5P_DEFAULT) > 0)
+      d.check(H5Ldelete(d.frames_group.get(), name.c_str(), H5P_DEFAULT), "remove " + name);
+  }
+  for (const BodyState& body : sim.bodyStates()) {
+    BodySeries s;
+    s.group = d.openGroup(d.bodies_group.get(), body.name);
+    auto open = [&](const char* name, hsize_t cols) {
+      Handle set = d.create(H5Dopen2(s.group.get(), name, H5P_DEFAULT), H5Dclose,
+                            std::string("open dataset ") + name);
+      const hsize_t dims[2] = {frames, cols};
+      d.check(H5Dset_extent(set.get(), dims), "shorten a body series");
+      return set;
+    };
+    s.time = open("time", 1);
+    s.position = open("position", 3);
+    s.orientation = open("orientation", 4);
+    s.linear_velocity = open("linear_velocity", 3);
+    s.angular_velocity = open("angular_velocity", 3);
+    d.bodies.push_back(std::move(s));
+  }
+  d.check(H5Fflush(d.file.get(), H5F_SCOPE_GLOBAL), "flush the file");
+  writeFileAtomically(d.xdmf_partial, d.xdmf(fileName(d.h5_partial)));
+}
+
+void FrameWriter::sync() {
+  const QuietHdf5Errors quiet;
+  Impl& d = *impl_;
+  d.check(H5Fflush(d.file.get(), H5F_SCOPE_GLOBAL), "flush the file");
+  void* handle = nullptr;
+  d.check(H5Fget_vfd_handle(d.file.get(), H5P_DEFAULT, &handle), "get the file handle");
+  if (handle && ::fsync(*static_cast<int*>(handle)) != 0)
+    throw std::runtime_error("cannot sync " + d.h5_partial + " to disk");
 }
 
 FrameWriter::~FrameWriter() {

@@ -37,6 +37,12 @@ class FrameWriter {
   /// Creates DIR/<scene.name>.h5.partial (DIR must exist) and writes the root attributes.
   /// Throws std::runtime_error naming the file when it cannot be written.
   FrameWriter(const std::string& out_dir, const SceneFile& scene, const Simulation& sim);
+  /// Continues the output of a stopped run: opens DIR/<scene.name>.h5.partial, keeps its
+  /// first `frames` frames (and body series rows), removes any later ones (written after
+  /// the checkpoint the run resumes from) and rewrites the XDMF index. Throws
+  /// std::runtime_error naming the file when it is missing or holds fewer frames.
+  FrameWriter(const std::string& out_dir, const SceneFile& scene, const Simulation& sim,
+              std::size_t frames);
   /// Closes the file; without finish() the .partial files stay as they are.
   ~FrameWriter();
   FrameWriter(const FrameWriter&) = delete;
@@ -45,6 +51,8 @@ class FrameWriter {
   /// Appends one output frame: the fluid `fluid` (a snapshot of `sim`) and the body
   /// states at sim.time(). Flushes the file and rewrites the XDMF index.
   void writeFrame(const Simulation& sim, const FluidSnapshot& fluid);
+  /// Forces the file's contents to disk (before a checkpoint that counts its frames).
+  void sync();
   /// Closes the file and moves the .partial files to their final names.
   void finish();
 

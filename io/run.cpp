@@ -1,6 +1,7 @@
 #include "io/run.hpp"
 
 #include "bullet_bridge/scene_world.hpp"
+#include "io/checkpoint.hpp"
 #include "io/output.hpp"
 #include "io/series.hpp"
 #include "io/summary.hpp"
@@ -13,6 +14,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -64,8 +66,12 @@ class Progress {
     if (!interactive_ && !last && k > 0 && elapsed - last_print_ < 1.0) return;
     last_print_ = elapsed;
     const double t = sim.time();
-    const double steps_per_second = elapsed > 0 ? sim.steps() / elapsed : 0.0;
-    const double eta = t > 0 ? elapsed * (end_time_ - t) / t : NAN;
+    if (k == first_frame_) {
+      first_steps_ = sim.steps();
+      first_time_ = t;
+    }
+    const double steps_per_second = elapsed > 0 ? (sim.steps() - first_steps_) / elapsed : 0.0;
+    const double eta = t > first_time_ ? elapsed * (end_time_ - t) / (t - first_time_) : NAN;
     char buf[160];
     std::snprintf(buf, sizeof(buf), "[wake] frame %zu/%zu  t=%.3f/%.3f s  %.0f steps/s  ETA %s", k,
                   last_frame_, t, end_time_, steps_per_second, formatDuration(eta).c_str());
@@ -94,6 +100,11 @@ class Progress {
   Clock::time_point start_ = Clock::now();
   double last_print_ = -1.0;
   std::size_t line_width_ = 0;
+  std::size_t first_frame_ = 0;    // the first frame this process writes (resumed runs: later)
+  std::uint64_t first_steps_ = 0;  // the steps taken before it
+  double first_time_ = 0;          // s, its time
+ public:
+  void startAt(std::size_t frame) { first_frame_ = frame; }
 };
 
 /// Creates the output folder; an existing file of that name is bad input.
@@ -107,9 +118,29 @@ void prepareOutputFolder(const std::string& dir) {
 
 }  // namespace
 
-RunResult runScene(const SceneFile& scene, const RunOptions& options) {
+namespace {
+
+/// Where a run starts: from t = 0, or from a checkpoint with `frames` frames written.
+struct Start {
+  const SimulationState* state = nullptr;
+  std::size_t frames = 0;
+  double checkpoint_every = 0;
+};
+
+std::string checkpointPath(const std::string& dir) {
+  return dir + "/checkpoint.h5";
+}
+
+/// The first multiple of `every` after t.
+double nextCheckpoint(double t, double every) {
+  return every * (std::floor(t / every * (1.0 + 1e-12)) + 1.0);
+}
+
+RunResult run(const SceneFile& scene, const RunOptions& options, const Start& from) {
   const Clock::time_point start = Clock::now();
   if (options.out_dir.empty()) throw SceneError("--out: an output folder is required");
+  if (!std::isfinite(from.checkpoint_every) || from.checkpoint_every < 0)
+    throw SceneError("--checkpoint-every: must be a finite number >= 0");
 
   // Everything that can reject the input happens before the output folder is touched.
   std::unique_ptr<SceneWorld> world;
@@ -118,6 +149,7 @@ RunResult runScene(const SceneFile& scene, const RunOptions& options) {
     world = std::make_unique<SceneWorld>(scene.sim, scene.bodies);
     world->coupled().start();
     sim = &world->coupled().simulation();
+    if (from.state) sim->restoreState(*from.state);
   } catch (const std::invalid_argument& e) {
     throw SceneError(scene.path + ": " + e.what());
   } catch (const std::bad_alloc&) {
@@ -125,9 +157,12 @@ RunResult runScene(const SceneFile& scene, const RunOptions& options) {
                      "this many particles; use a larger particle_radius or smaller blocks");
   }
   prepareOutputFolder(options.out_dir);
+  const std::string checkpoint = checkpointPath(options.out_dir);
+  if (!from.state) std::remove(checkpoint.c_str());  // an earlier run's: not this run's
 
   const std::size_t last_frame = frameCount(scene);
   Progress progress(options, last_frame, scene.end_time);
+  progress.startAt(from.frames);
   const int threads = omp_get_max_threads();
   {
     std::ostringstream m;
@@ -137,28 +172,57 @@ RunResult runScene(const SceneFile& scene, const RunOptions& options) {
       << " thread" << (threads == 1 ? "" : "s") << ", " << last_frame + 1 << " frames";
     if (sim->removedAtStart() > 0)
       m << " (" << sim->removedAtStart() << " fluid particles inside bodies removed)";
+    if (from.state) m << "; resumed at t = " << sim->time() << " s after frame " << from.frames - 1;
     progress.message(m.str());
   }
 
-  FrameWriter writer(options.out_dir, scene, *sim);
-  SeriesWriter series(options.out_dir, *sim);
+  std::unique_ptr<FrameWriter> writer;
+  std::unique_ptr<SeriesWriter> series;
+  try {
+    if (from.state) {
+      writer = std::make_unique<FrameWriter>(options.out_dir, scene, *sim, from.frames);
+      series = std::make_unique<SeriesWriter>(options.out_dir, *sim, from.frames);
+    } else {
+      writer = std::make_unique<FrameWriter>(options.out_dir, scene, *sim);
+      series = std::make_unique<SeriesWriter>(options.out_dir, *sim);
+    }
+  } catch (const std::exception& e) {
+    throw RunError(e.what());
+  }
+  CheckpointInfo info;
+  info.scene_path = scene.path;
+  info.scene_text = scene.text;
+  info.end_time = scene.end_time;
+  info.resolution = scene.resolution;
+  info.checkpoint_every = from.checkpoint_every;
+  double next_checkpoint = from.checkpoint_every > 0
+                               ? nextCheckpoint(sim->time(), from.checkpoint_every)
+                               : std::numeric_limits<double>::infinity();
   FluidSnapshot fluid;
   try {
-    for (std::size_t k = 0; k <= last_frame; ++k) {
+    for (std::size_t k = from.frames; k <= last_frame; ++k) {
       if (k > 0) world->coupled().advanceTo(frameTime(scene, k));
       sim->snapshot(fluid);
-      writer.writeFrame(*sim, fluid);
-      series.writeFrame(*sim, k == 0);
+      writer->writeFrame(*sim, fluid);
+      series->writeFrame(*sim, k == 0);
       sim->resetWindow();
       progress.frame(k, *sim);
+      if (sim->time() >= next_checkpoint && k < last_frame) {
+        // The frames it counts are on disk before it is.
+        writer->sync();
+        series->sync();
+        info.frames = k + 1;
+        writeCheckpoint(checkpoint, sim->saveState(), info);
+        next_checkpoint = nextCheckpoint(sim->time(), from.checkpoint_every);
+      }
     }
-    writer.finish();
-    series.finish();
+    writer->finish();
+    series->finish();
   } catch (const HealthError& e) {
     // The simulation checked itself after every step and says what to change.
     progress.abandon();
     throw RunError(scene.path + ": the run stopped at " + e.what() + "; the " +
-                   std::to_string(writer.frames()) + " frames before are in " + writer.h5Path() +
+                   std::to_string(writer->frames()) + " frames before are in " + writer->h5Path() +
                    ".partial");
   } catch (const std::exception& e) {
     progress.abandon();
@@ -169,26 +233,63 @@ RunResult runScene(const SceneFile& scene, const RunOptions& options) {
   }
 
   RunStats stats;
-  stats.frames = writer.frames();
+  stats.frames = writer->frames();
   stats.threads = threads;
-  stats.output = fs::path(writer.h5Path()).filename().string();
+  stats.output = fs::path(writer->h5Path()).filename().string();
   stats.wall_seconds = secondsSince(start);
 
   RunResult result;
   result.summary = makeSummary(scene, *sim, stats);
-  result.h5_path = writer.h5Path();
-  result.xdmf_path = writer.xdmfPath();
+  result.h5_path = writer->h5Path();
+  result.xdmf_path = writer->xdmfPath();
   result.summary_path = options.out_dir + "/summary.json";
   try {
     writeSummary(result.summary_path, result.summary);
   } catch (const std::exception& e) {
     throw RunError(e.what());
   }
+  std::remove(checkpoint.c_str());  // the run is complete: nothing to resume
   std::ostringstream m;
   m << "done: " << stats.frames << " frames, " << sim->steps() << " steps in " << std::fixed
     << std::setprecision(2) << stats.wall_seconds << " s -> " << result.h5_path;
   progress.message(m.str());
   return result;
+}
+
+}  // namespace
+
+RunResult runScene(const SceneFile& scene, const RunOptions& options) {
+  Start from;
+  from.checkpoint_every = options.checkpoint_every;
+  return run(scene, options, from);
+}
+
+RunResult resumeRun(const RunOptions& options) {
+  const std::string dir = options.out_dir;
+  const std::string path = checkpointPath(dir);
+  std::error_code ec;
+  if (!fs::exists(path, ec)) {
+    if (fs::exists(dir + "/summary.json", ec))
+      throw SceneError("--resume: the run in " + dir + " is complete (no checkpoint to resume)");
+    throw SceneError("--resume: no checkpoint in " + dir +
+                     " (wake run SCENE --out DIR --checkpoint-every T writes them)");
+  }
+  CheckpointInfo info;
+  SimulationState state;
+  try {
+    state = readCheckpoint(path, &info);
+  } catch (const std::exception& e) {
+    throw SceneError(std::string("--resume: ") + e.what());
+  }
+  // The scene as it was when the run started (the file may have changed since).
+  SceneFile scene = parseScene(info.scene_text, info.scene_path);
+  overrideEndTime(scene, info.end_time, "checkpoint end_time");
+  if (info.resolution != 1) overrideResolution(scene, info.resolution, "checkpoint resolution");
+  Start from;
+  from.state = &state;
+  from.frames = static_cast<std::size_t>(info.frames);
+  from.checkpoint_every = info.checkpoint_every;
+  return run(scene, options, from);
 }
 
 }  // namespace wake

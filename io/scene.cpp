@@ -605,6 +605,7 @@ SceneFile parseScene(const std::string& json_text, const std::string& path) {
 
   SceneFile scene;
   scene.path = path;
+  scene.text = json_text;
   scene.name = fs::path(path).stem().string();
   if (root.find("name")) scene.name = root.string("name");
   checkName(root.find("name") ? root.at("name") : root.where(), scene.name);
@@ -647,6 +648,7 @@ void overrideResolution(SceneFile& scene, double factor, const std::string& opti
   if (!std::isfinite(factor) || !kPositive.contains(factor))
     throw SceneError(option + ": must be a finite number > 0 (got " + formatNumber(factor) + ")");
   scene.sim.fluid.particle_radius /= factor;
+  scene.resolution *= factor;
   const std::string where = option + " " + formatNumber(factor);
   checkParticleCount(Where{&where, ""}, scene.sim);
 }

@@ -34,6 +34,8 @@ struct SceneFile {
   std::vector<BodySpec> bodies;  ///< validated bodies, in file order; mesh files absolute
   double end_time = 0;           ///< s, > 0: the run stops here (last output frame)
   double frame_rate = 30;        ///< 1/s, > 0: output frames per simulated second
+  std::string text;              ///< the scene file's contents (JSON), as read
+  double resolution = 1;         ///< the --resolution factor applied (1: none)
 };
 
 /// Reads and validates a scene file. Throws SceneError (one line, naming the field).

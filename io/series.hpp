@@ -30,9 +30,15 @@ class SeriesWriter {
   /// Creates DIR/series.csv.partial and writes the header. Throws std::runtime_error
   /// naming the file when it cannot be written.
   SeriesWriter(const std::string& out_dir, const Simulation& sim);
+  /// Continues the series of a stopped run: keeps the header and the first `frames` rows
+  /// of DIR/series.csv.partial, drops later ones. Throws std::runtime_error naming the file
+  /// when it is missing or shorter.
+  SeriesWriter(const std::string& out_dir, const Simulation& sim, std::size_t frames);
   /// Appends the row of the current frame (call after sim.resetWindow() was last called
   /// at the previous frame) and flushes.
   void writeFrame(const Simulation& sim, bool first);
+  /// Forces the file's contents to disk (before a checkpoint that counts its rows).
+  void sync();
   /// Closes the file and renames it to DIR/series.csv.
   void finish();
 
@@ -41,6 +47,7 @@ class SeriesWriter {
  private:
   std::string partial_, final_;
   std::vector<std::size_t> moving_;  // indices of moving bodies
+  void findMovingBodies(const Simulation& sim);
   std::ofstream out_;
 };
 

@@ -3,6 +3,8 @@
 #include "io/files.hpp"
 #include "io/scene.hpp"
 
+#include <cstdio>
+
 namespace wake {
 namespace {
 
@@ -53,6 +55,11 @@ nlohmann::ordered_json makeSummary(const SceneFile& scene, const Simulation& sim
   j["threads"] = stats.threads;
   j["mean_dt"] = mean_dt;  // s
   j["output"] = stats.output;
+  {
+    char hash[17];
+    std::snprintf(hash, sizeof(hash), "%016llx", static_cast<unsigned long long>(stateHash(sim)));
+    j["state_hash"] = hash;  // the fluid's final positions and velocities
+  }
   j["timings"] = {{"neighbors", t.neighbors},     {"density", t.density},
                   {"forces", t.forces},           {"boundary", t.boundary},
                   {"integration", t.integration}, {"rigid", t.rigid},

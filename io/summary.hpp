@@ -6,8 +6,9 @@
 // angular_velocity (rad/s)}] at the end of the run.
 // Extensions: wake_version, removed_at_start, speed_of_sound (m/s), particle_radius (m),
 // rest_density (kg/m^3), method, frames, threads, mean_dt (s), end_time (s), output
-// (the .h5 file name), timings {neighbors, density, forces, boundary, integration,
-// total} (wall-clock s).
+// (the .h5 file name), state_hash (16 hex digits: FNV-1a of the final fluid positions and
+// velocities in id order; equal for runs that end in the same state bit for bit),
+// timings {neighbors, density, forces, boundary, integration, total} (wall-clock s).
 #pragma once
 
 #include "coupling/simulation.hpp"

@@ -1,6 +1,8 @@
 // `wake`: the headless command line (DESIGN.md §7).
 //
 //   wake run SCENE.json --out DIR [--quiet] [--threads N] [--end T] [--resolution F]
+//            [--checkpoint-every T]
+//   wake run --resume DIR [--quiet] [--threads N]
 //   wake render DIR [--out FRAMES_DIR] [--scene NAME] [--color speed|depth] [--width W]
 //               [--height H] [--view iso|front|side|top] [--frames A:B|K] [--every N]
 //               [--max-speed V] [--video] [--quiet] [--threads N]
@@ -8,9 +10,9 @@
 // Exit status: 0 success, 2 bad input (scene, options), 1 a run that failed.
 // Every error is one line on stderr: "wake: error: <message>".
 #include "io/files.hpp"
-#include "render/render.hpp"
 #include "io/run.hpp"
 #include "io/scene.hpp"
+#include "render/render.hpp"
 
 #include <omp.h>
 #include <unistd.h>
@@ -45,8 +47,19 @@ int main(int argc, char** argv) {
   double end_time = 0.0, resolution = 1.0;
   CLI::App* run = app.add_subcommand(
       "run", "Run a scene headless; write DIR/<scene>.h5, DIR/<scene>.xdmf, DIR/summary.json");
-  run->add_option("scene", scene_path, "Scene file (JSON, see io/SCENE_FORMAT.md)")->required();
-  run->add_option("--out,-o", out_dir, "Output folder (created when missing)")->required();
+  std::string resume_dir;
+  double checkpoint_every = 0.0;
+  CLI::Option* scene_option =
+      run->add_option("scene", scene_path, "Scene file (JSON, see io/SCENE_FORMAT.md)");
+  CLI::Option* out_option =
+      run->add_option("--out,-o", out_dir, "Output folder (created when missing)");
+  CLI::Option* resume_option = run->add_option(
+      "--resume", resume_dir,
+      "Continue the stopped run in DIR from its last checkpoint (no scene, --out, --end, "
+      "--resolution or --checkpoint-every with it)");
+  CLI::Option* checkpoint_option = run->add_option(
+      "--checkpoint-every", checkpoint_every,
+      "Write DIR/checkpoint.h5 every T s of simulated time (at the first frame at or past it)");
   run->add_flag("--quiet,-q", quiet, "No progress output");
   CLI::Option* threads_option =
       run->add_option("--threads,-j", threads, "OpenMP threads (>= 1; default: all cores)");
@@ -123,15 +136,32 @@ int main(int argc, char** argv) {
         throw wake::SceneError("--threads: must be >= 1 (got " + std::to_string(threads) + ")");
       omp_set_num_threads(threads);
     }
-    wake::SceneFile scene = wake::loadScene(scene_path);
-    if (end_option->count() > 0) wake::overrideEndTime(scene, end_time, "--end");
-    if (resolution_option->count() > 0) wake::overrideResolution(scene, resolution, "--resolution");
-
     wake::RunOptions options;
-    options.out_dir = out_dir;
     options.quiet = quiet;
     options.interactive = isatty(STDERR_FILENO) != 0;
     options.log = &std::cerr;
+    if (resume_option->count() > 0) {
+      for (const CLI::Option* o :
+           {scene_option, out_option, end_option, resolution_option, checkpoint_option})
+        if (o->count() > 0)
+          throw wake::SceneError("--resume: " + o->get_name() +
+                                 " cannot be given with it (the checkpoint holds the run's)");
+      options.out_dir = resume_dir;
+      wake::resumeRun(options);
+      return 0;
+    }
+    if (scene_option->count() == 0)
+      throw wake::SceneError("run: a scene file is required (or --resume DIR)");
+    if (out_option->count() == 0) throw wake::SceneError("--out: an output folder is required");
+    if (checkpoint_option->count() > 0 &&
+        (!std::isfinite(checkpoint_every) || !(checkpoint_every > 0)))
+      throw wake::SceneError("--checkpoint-every: must be a finite number > 0 (got " +
+                             std::to_string(checkpoint_every) + ")");
+    wake::SceneFile scene = wake::loadScene(scene_path);
+    if (end_option->count() > 0) wake::overrideEndTime(scene, end_time, "--end");
+    if (resolution_option->count() > 0) wake::overrideResolution(scene, resolution, "--resolution");
+    options.out_dir = out_dir;
+    options.checkpoint_every = checkpoint_every;
     wake::runScene(scene, options);
     return 0;
   } catch (const wake::SceneError& e) {

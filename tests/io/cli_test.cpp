@@ -26,48 +26,15 @@ namespace {
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
+using wake::test::CliResult;
 using wake::test::datasetDims;
 using wake::test::readDataset;
 using wake::test::readFile;
+using wake::test::runWake;
+using wake::test::TempDir;
 
 const std::string kScene = std::string(WAKE_TEST_DATA_DIR) + "/scenes/small_dambreak.json";
 constexpr std::size_t kFrames = 6;  // round(end 0.05 s * 100 /s) + 1
-
-/// A fresh folder under the system's temporary folder, removed at the end.
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    static int counter = 0;
-    path = fs::temp_directory_path() /
-           ("wake_io_test_" + std::to_string(getpid()) + "_" + std::to_string(counter++));
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
-
-struct CliResult {
-  int status = -1;  ///< exit status of the wake binary
-  std::string out, err;
-};
-
-/// Runs the wake binary with `args` (already shell-quoted), capturing stdout and stderr.
-CliResult runWake(const std::string& args, const fs::path& scratch) {
-  const fs::path out = scratch / "stdout.txt", err = scratch / "stderr.txt";
-  const std::string command = std::string("\"") + WAKE_CLI_PATH + "\" " + args + " >\"" +
-                              out.string() + "\" 2>\"" + err.string() + "\"";
-  const int raw = std::system(command.c_str());
-  CliResult r;
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  r.out = readFile(out);
-  r.err = readFile(err);
-  fs::remove(out);
-  fs::remove(err);
-  return r;
-}
 
 std::size_t lineCount(const std::string& s) {
   return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n'));

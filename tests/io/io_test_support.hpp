@@ -5,6 +5,10 @@
 #include <gtest/gtest.h>
 #include <hdf5.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -47,6 +51,42 @@ std::vector<T> readDataset(hid_t location, const std::string& name, hid_t memory
   }
   H5Dclose(set);
   return values;
+}
+
+/// A fresh folder under the system's temporary folder, removed at the end.
+struct TempDir {
+  std::filesystem::path path;
+  TempDir() {
+    static int counter = 0;
+    path = std::filesystem::temp_directory_path() /
+           ("wake_io_test_" + std::to_string(getpid()) + "_" + std::to_string(counter++));
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+};
+
+struct CliResult {
+  int status = -1;  ///< exit status of the wake binary
+  std::string out, err;
+};
+
+/// Runs the wake binary with `args` (already shell-quoted), capturing stdout and stderr.
+inline CliResult runWake(const std::string& args, const std::filesystem::path& scratch) {
+  const std::filesystem::path out = scratch / "stdout.txt", err = scratch / "stderr.txt";
+  const std::string command = std::string("\"") + WAKE_CLI_PATH + "\" " + args + " >\"" +
+                              out.string() + "\" 2>\"" + err.string() + "\"";
+  const int raw = std::system(command.c_str());
+  CliResult r;
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  r.out = readFile(out);
+  r.err = readFile(err);
+  std::filesystem::remove(out);
+  std::filesystem::remove(err);
+  return r;
 }
 
 }  // namespace wake::test

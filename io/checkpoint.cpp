@@ -1,0 +1,148 @@
+#include "io/checkpoint.hpp"
+
+#include "io/files.hpp"
+#include "io/hdf5_writer.hpp"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+
+namespace wake {
+namespace {
+
+using hdf5::Handle;
+using hdf5::QuietHdf5Errors;
+
+constexpr const char* kFormat = "wake checkpoint 1";
+
+static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 arrays are stored as N x 3 doubles");
+static_assert(sizeof(Wrench) == 6 * sizeof(double), "wrenches are stored as bodies x 6");
+
+std::string folderOf(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  return slash == std::string::npos ? "." : path.substr(0, slash);
+}
+
+}  // namespace
+
+void writeCheckpoint(const std::string& path, const SimulationState& s,
+                     const CheckpointInfo& info) {
+  const QuietHdf5Errors quiet;
+  const std::string tmp = path + ".tmp";
+  hdf5::Writer w;
+  w.path = tmp;
+  {
+    Handle file = w.create(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT),
+                           H5Fclose, "create the file");
+    const hid_t root = file.get();
+    w.writeAttribute(root, "format", std::string(kFormat));
+    w.writeAttribute(root, "wake_version", std::string(wakeVersion()));
+    w.writeAttribute(root, "scene_path", info.scene_path);
+    // A dataset, not an attribute: attributes are limited to 64 kB.
+    w.writeDataset(root, "scene_text", H5T_NATIVE_UCHAR, info.scene_text.data(),
+                   info.scene_text.size(), 1);
+    w.writeAttribute(root, "end_time", info.end_time);
+    w.writeAttribute(root, "resolution", info.resolution);
+    w.writeAttribute(root, "checkpoint_every", info.checkpoint_every);
+    w.writeAttribute(root, "frames", info.frames);
+
+    const Handle g = w.createGroup(root, "state");
+    const hid_t group = g.get();
+    w.writeAttribute(group, "time", s.time);
+    w.writeAttribute(group, "last_dt", s.last_dt);
+    w.writeAttribute(group, "max_density_ratio", s.max_density_ratio);
+    w.writeAttribute(group, "window_density_ratio", s.window_density_ratio);
+    w.writeAttribute(group, "steps", s.steps);
+    w.writeAttribute(group, "removed_at_start", s.removed_at_start);
+    w.writeAttribute(group, "lost", s.lost);
+    w.writeAttribute(group, "max_penetrating", s.max_penetrating);
+    w.writeAttribute(group, "window_penetrating", s.window_penetrating);
+    w.writeAttribute(group, "last_contacts", s.last_contacts);
+    const FluidState& f = s.fluid;
+    const hsize_t n = f.size();
+    w.writeDataset(group, "position", H5T_NATIVE_DOUBLE, f.position.data(), n, 3);
+    w.writeDataset(group, "velocity", H5T_NATIVE_DOUBLE, f.velocity.data(), n, 3);
+    w.writeDataset(group, "acceleration", H5T_NATIVE_DOUBLE, f.acceleration.data(), n, 3);
+    w.writeDataset(group, "density", H5T_NATIVE_DOUBLE, f.density.data(), n, 1);
+    w.writeDataset(group, "pressure", H5T_NATIVE_DOUBLE, f.pressure.data(), n, 1);
+    w.writeDataset(group, "kinematic_viscosity", H5T_NATIVE_DOUBLE, f.kinematic_viscosity.data(), n,
+                   1);
+    w.writeDataset(group, "id", H5T_NATIVE_UINT32, f.id.data(), n, 1);
+    w.writeDataset(group, "wrenches", H5T_NATIVE_DOUBLE, s.wrenches.data(), s.wrenches.size(), 6);
+    w.writeDataset(group, "rigid", H5T_NATIVE_DOUBLE, s.rigid.data(), s.rigid.size(), 1);
+    w.check(H5Fclose(file.release()), "close the file");
+  }
+  syncFile(tmp);
+  renameFile(tmp, path);
+  syncFile(folderOf(path));
+}
+
+SimulationState readCheckpoint(const std::string& path, CheckpointInfo* info) {
+  const QuietHdf5Errors quiet;
+  hdf5::Writer r;
+  r.path = path;
+  if (::access(path.c_str(), R_OK) != 0)
+    throw std::runtime_error("no checkpoint " + path + ": " + std::strerror(errno));
+  const Handle file =
+      r.create(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose, "open the file");
+  const hid_t root = file.get();
+  if (H5Aexists(root, "format") <= 0 || r.readStringAttribute(root, "format") != kFormat)
+    throw std::runtime_error(path + " is not a Wake checkpoint (\"" + kFormat + "\")");
+  if (info) {
+    info->scene_path = r.readStringAttribute(root, "scene_path");
+    const std::vector<unsigned char> text =
+        r.readDataset<unsigned char>(root, "scene_text", H5T_NATIVE_UCHAR, 1);
+    info->scene_text.assign(text.begin(), text.end());
+    info->end_time = r.readAttribute<double>(root, "end_time", H5T_NATIVE_DOUBLE);
+    info->resolution = r.readAttribute<double>(root, "resolution", H5T_NATIVE_DOUBLE);
+    info->checkpoint_every = r.readAttribute<double>(root, "checkpoint_every", H5T_NATIVE_DOUBLE);
+    info->frames = r.readAttribute<std::uint64_t>(root, "frames", H5T_NATIVE_UINT64);
+  }
+  const Handle g = r.openGroup(root, "state");
+  const hid_t group = g.get();
+  SimulationState s;
+  auto u64 = [&](const char* name) {
+    return r.readAttribute<std::uint64_t>(group, name, H5T_NATIVE_UINT64);
+  };
+  auto f64 = [&](const char* name) {
+    return r.readAttribute<double>(group, name, H5T_NATIVE_DOUBLE);
+  };
+  s.time = f64("time");
+  s.last_dt = f64("last_dt");
+  s.max_density_ratio = f64("max_density_ratio");
+  s.window_density_ratio = f64("window_density_ratio");
+  s.steps = u64("steps");
+  s.removed_at_start = u64("removed_at_start");
+  s.lost = u64("lost");
+  s.max_penetrating = u64("max_penetrating");
+  s.window_penetrating = u64("window_penetrating");
+  s.last_contacts = u64("last_contacts");
+  auto vec3s = [&](const char* name) {
+    const std::vector<double> flat = r.readDataset<double>(group, name, H5T_NATIVE_DOUBLE, 3);
+    std::vector<Vec3> out(flat.size() / 3);
+    for (std::size_t i = 0; i < out.size(); ++i)
+      out[i] = Vec3(flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]);
+    return out;
+  };
+  FluidState& f = s.fluid;
+  f.position = vec3s("position");
+  f.velocity = vec3s("velocity");
+  f.acceleration = vec3s("acceleration");
+  f.density = r.readDataset<double>(group, "density", H5T_NATIVE_DOUBLE, 1);
+  f.pressure = r.readDataset<double>(group, "pressure", H5T_NATIVE_DOUBLE, 1);
+  f.kinematic_viscosity = r.readDataset<double>(group, "kinematic_viscosity", H5T_NATIVE_DOUBLE, 1);
+  f.id = r.readDataset<std::uint32_t>(group, "id", H5T_NATIVE_UINT32, 1);
+  const std::vector<double> w = r.readDataset<double>(group, "wrenches", H5T_NATIVE_DOUBLE, 6);
+  s.wrenches.resize(w.size() / 6);
+  for (std::size_t b = 0; b < s.wrenches.size(); ++b) {
+    s.wrenches[b].force = Vec3(w[6 * b], w[6 * b + 1], w[6 * b + 2]);
+    s.wrenches[b].torque = Vec3(w[6 * b + 3], w[6 * b + 4], w[6 * b + 5]);
+  }
+  s.rigid = r.readDataset<double>(group, "rigid", H5T_NATIVE_DOUBLE, 1);
+  return s;
+}
+
+}  // namespace wake

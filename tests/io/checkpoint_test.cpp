@@ -1,0 +1,248 @@
+// Checkpoint and restart: a run killed (SIGKILL) at any moment keeps every frame it had
+// completed, and `wake run --resume` finishes it to the very output of a run that was never
+// stopped (every frame, every body series row, series.csv and the final state hash), for a
+// fluid-only scene and a scene with a two-way body. Also the C++ API's save and restore.
+#include "io/checkpoint.hpp"
+#include "io/io_test_support.hpp"
+
+#include "bullet_bridge/scene_world.hpp"
+#include "io/scene.hpp"
+
+#include <gtest/gtest.h>
+#include <hdf5.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+extern char** environ;
+
+namespace wake {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+using test::readFile;
+using test::runWake;
+using test::TempDir;
+
+const std::string kScenes = std::string(WAKE_TEST_DATA_DIR) + "/scenes/";
+
+std::string inQuotes(const fs::path& p) {
+  return "\"" + p.string() + "\"";
+}
+
+/// Every dataset of every frame, every body series and attribute time, as raw bytes, keyed
+/// by path; empty when the file does not open.
+std::map<std::string, std::string> contents(const fs::path& h5) {
+  std::map<std::string, std::string> out;
+  H5E_auto2_t func;
+  void* data;
+  H5Eget_auto2(H5E_DEFAULT, &func, &data);
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const hid_t file = H5Fopen(h5.string().c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  H5Eset_auto2(H5E_DEFAULT, func, data);
+  if (file < 0) return out;
+  auto read = [&](const std::string& path) {
+    const hid_t set = H5Dopen2(file, path.c_str(), H5P_DEFAULT);
+    if (set < 0) return;
+    const hid_t type = H5Dget_type(set), space = H5Dget_space(set);
+    const hssize_t n = H5Sget_simple_extent_npoints(space);
+    std::string bytes(static_cast<std::size_t>(n) * H5Tget_size(type), '\0');
+    if (n > 0) H5Dread(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, bytes.data());
+    out[path] = bytes;
+    H5Sclose(space);
+    H5Tclose(type);
+    H5Dclose(set);
+  };
+  H5G_info_t info;
+  const hid_t frames = H5Gopen2(file, "frames", H5P_DEFAULT);
+  H5Gget_info(frames, &info);
+  for (hsize_t k = 0; k < info.nlinks; ++k) {
+    char name[48];
+    std::snprintf(name, sizeof(name), "frames/%06llu", static_cast<unsigned long long>(k));
+    for (const char* d : {"position", "velocity", "density", "pressure", "id"})
+      read(std::string(name) + "/" + d);
+  }
+  H5Gclose(frames);
+  const hid_t bodies = H5Gopen2(file, "bodies", H5P_DEFAULT);
+  H5Gget_info(bodies, &info);
+  for (hsize_t b = 0; b < info.nlinks; ++b) {
+    char name[256];
+    H5Lget_name_by_idx(bodies, ".", H5_INDEX_NAME, H5_ITER_INC, b, name, sizeof(name), H5P_DEFAULT);
+    for (const char* d : {"time", "position", "orientation", "linear_velocity", "angular_velocity"})
+      read(std::string("bodies/") + name + "/" + d);
+  }
+  H5Gclose(bodies);
+  H5Fclose(file);
+  return out;
+}
+
+std::size_t frameCount(const std::map<std::string, std::string>& c) {
+  std::size_t n = 0;
+  for (const auto& [path, bytes] : c)
+    n += path.size() > 9 && path.compare(path.size() - 9, 9, "/position") == 0 &&
+         path.rfind("frames/", 0) == 0;
+  return n;
+}
+
+/// Starts `wake run` and kills it with SIGKILL after `seconds`. Returns false when it had
+/// already ended.
+bool runAndKill(const std::string& scene, const std::string& end, const fs::path& out, double every,
+                double seconds) {
+  std::vector<std::string> args = {WAKE_CLI_PATH,
+                                   "run",
+                                   scene,
+                                   "--out",
+                                   out.string(),
+                                   "--quiet",
+                                   "--end",
+                                   end,
+                                   "--checkpoint-every",
+                                   std::to_string(every)};
+  std::vector<char*> argv;
+  for (std::string& a : args)
+    argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  if (posix_spawn(&pid, WAKE_CLI_PATH, nullptr, nullptr, argv.data(), environ) != 0) return false;
+  std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
+  const bool alive = waitpid(pid, nullptr, WNOHANG) == 0;
+  if (alive) {
+    kill(pid, SIGKILL);
+    waitpid(pid, nullptr, 0);
+  }
+  return alive;
+}
+
+/// The output of one run of `scene` that was never stopped, and how long it took.
+struct Reference {
+  TempDir dir;
+  std::map<std::string, std::string> frames;
+  std::string series, hash;
+  double seconds = 0;
+  Reference(const std::string& scene, const std::string& end) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const test::CliResult r = runWake(
+        "run " + inQuotes(scene) + " --out " + inQuotes(dir.path / "out") + " --quiet --end " + end,
+        dir.path);
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_EQ(r.status, 0) << r.err;
+    const std::string name = fs::path(scene).stem().string();
+    frames = contents(dir.path / "out" / (name + ".h5"));
+    series = readFile(dir.path / "out" / "series.csv");
+    hash = json::parse(readFile(dir.path / "out" / "summary.json"))["state_hash"];
+  }
+};
+
+/// Kills runs of `scene` at `kills` random moments; each time, every frame left in the
+/// partial file equals the reference's, and --resume ends in the reference's output.
+void killAndResume(const std::string& scene, const std::string& end, int kills, unsigned seed) {
+  const Reference ref(scene, end);
+  ASSERT_GT(frameCount(ref.frames), 10u);
+  const std::string name = fs::path(scene).stem().string();
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> moment(0.05, 1.0);
+  int resumed = 0;
+  for (int i = 0; i < kills; ++i) {
+    const TempDir dir;
+    const fs::path out = dir.path / "out";
+    const double at = moment(random) * ref.seconds;
+    const bool killed = runAndKill(scene, end, out, 0.02, at);
+    SCOPED_TRACE("kill " + std::to_string(i) + " after " + std::to_string(at) + " s");
+    if (!killed) continue;  // it had finished
+    // Every frame completed before the kill opens and equals the uninterrupted run's.
+    const std::map<std::string, std::string> partial = contents(out / (name + ".h5.partial"));
+    for (const auto& [path, bytes] : partial) {
+      if (path.rfind("frames/", 0) != 0) continue;
+      ASSERT_TRUE(ref.frames.count(path)) << path;
+      EXPECT_TRUE(ref.frames.at(path) == bytes) << path << " differs";
+    }
+    const test::CliResult r = runWake("run --resume " + inQuotes(out) + " --quiet", dir.path);
+    if (!fs::exists(out / "checkpoint.h5") && r.status == 2 &&
+        r.err.find("no checkpoint") != std::string::npos)
+      continue;  // killed before the first checkpoint: nothing to resume, said so
+    ASSERT_EQ(r.status, 0) << r.err;
+    ++resumed;
+    EXPECT_FALSE(fs::exists(out / "checkpoint.h5")) << "a complete run keeps no checkpoint";
+    const std::map<std::string, std::string> done = contents(out / (name + ".h5"));
+    EXPECT_EQ(done.size(), ref.frames.size());
+    EXPECT_TRUE(done == ref.frames) << "the resumed run's output differs";
+    EXPECT_EQ(readFile(out / "series.csv"), ref.series);
+    EXPECT_EQ(json::parse(readFile(out / "summary.json"))["state_hash"], ref.hash);
+  }
+  std::printf("[ checkpoint ] %s: %d of %d killed runs resumed to the same output\n", name.c_str(),
+              resumed, kills);
+  EXPECT_GE(resumed, kills / 2);
+}
+
+TEST(Checkpoint, KilledFluidRunKeepsItsFramesAndResumesToTheSameOutput) {
+  killAndResume(kScenes + "small_dambreak.json", "0.3", 10, 11);
+}
+
+TEST(Checkpoint, KilledRunWithATwoWayBodyResumesToTheSameOutput) {
+  killAndResume(kScenes + "small_float.json", "0.3", 10, 12);
+}
+
+TEST(Checkpoint, BadResumeCommandsExitTwoNamingTheProblem) {
+  const TempDir dir;
+  test::CliResult r = runWake("run --resume " + inQuotes(dir.path), dir.path);
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("no checkpoint in"), std::string::npos) << r.err;
+  r = runWake("run --resume " + inQuotes(dir.path) + " --out " + inQuotes(dir.path), dir.path);
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--resume: --out"), std::string::npos) << r.err;
+  r = runWake("run " + inQuotes(kScenes + "small_dambreak.json") + " --out " +
+                  inQuotes(dir.path / "o") + " --checkpoint-every 0",
+              dir.path);
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--checkpoint-every"), std::string::npos) << r.err;
+  // A complete run has nothing to resume.
+  r = runWake("run " + inQuotes(kScenes + "small_dambreak.json") + " --out " +
+                  inQuotes(dir.path / "done") + " --quiet --checkpoint-every 0.01",
+              dir.path);
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = runWake("run --resume " + inQuotes(dir.path / "done"), dir.path);
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("is complete"), std::string::npos) << r.err;
+}
+
+TEST(Checkpoint, TheCppApiSavesAndRestoresARunBitForBit) {
+  // A scene world (Bullet, a two-way box): saved to a file at 0.1 s, restored into a
+  // second world built from the same scene, both run on to 0.2 s.
+  const SceneFile scene = loadScene(kScenes + "small_float.json");
+  SceneWorld a(scene.sim, scene.bodies);
+  a.coupled().advanceTo(0.1);
+  const TempDir dir;
+  const std::string file = (dir.path / "state.h5").string();
+  writeCheckpoint(file, a.simulation().saveState());
+  a.coupled().advanceTo(0.2);
+
+  SceneWorld b(scene.sim, scene.bodies);
+  b.coupled().start();
+  b.coupled().simulation().restoreState(readCheckpoint(file));
+  EXPECT_EQ(b.simulation().time(), 0.1);
+  b.coupled().advanceTo(0.2);
+  EXPECT_EQ(b.simulation().steps(), a.simulation().steps());
+  EXPECT_EQ(stateHash(b.simulation()), stateHash(a.simulation()));
+  const BodyState box_a = a.simulation().bodyStates()[1], box_b = b.simulation().bodyStates()[1];
+  EXPECT_EQ(box_a.position, box_b.position);
+  EXPECT_EQ(box_a.linear_velocity, box_b.linear_velocity);
+  EXPECT_EQ(box_a.orientation.coeffs(), box_b.orientation.coeffs());
+
+  // A state that does not fit the simulation is refused.
+  SimulationState wrong = readCheckpoint(file);
+  wrong.wrenches.pop_back();
+  EXPECT_THROW(b.coupled().simulation().restoreState(wrong), std::invalid_argument);
+  EXPECT_THROW(readCheckpoint((dir.path / "none.h5").string()), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace wake
