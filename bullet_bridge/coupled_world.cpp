@@ -265,6 +265,11 @@ void CoupledWorld::setKinematicVelocity(btRigidBody* body, const Vec3& linear,
   throw std::invalid_argument("setKinematicVelocity: body is not coupled");
 }
 
+void CoupledWorld::setFluidForces(FluidForces forces) {
+  fluid_forces_ = std::move(forces);
+  if (sim_) sim_->setFluidForces(fluid_forces_);
+}
+
 void CoupledWorld::start() {
   if (sim_) return;
   SimulationSettings s;
@@ -299,6 +304,7 @@ void CoupledWorld::start() {
   auto rigid = std::make_unique<Bodies>(*this);
   rigid_ = rigid.get();
   sim_ = std::make_unique<Simulation>(std::move(s), std::move(rigid));
+  if (fluid_forces_) sim_->setFluidForces(fluid_forces_);
 }
 
 std::size_t CoupledWorld::advance(double frame_time) {

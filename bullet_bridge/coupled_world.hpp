@@ -75,6 +75,10 @@ class CoupledWorld {
   /// Velocity (world frame, about the centre of mass) of a coupled kinematic body.
   void setKinematicVelocity(btRigidBody* body, const Vec3& linear, const Vec3& angular);
 
+  /// Forces of your own on the fluid, added every sub-step after the fluid's forces and
+  /// before the bodies' prediction (coupling/simulation.hpp, FluidForces). Any time.
+  void setFluidForces(FluidForces forces);
+
   /// Builds the fluid and the boundary samples (done by the first advance()).
   void start();
   /// Advances fluid and bodies by `frame_time` (s, >= 0); returns the sub-steps taken.
@@ -101,6 +105,7 @@ class CoupledWorld {
   std::vector<BodyCoupling> couplings_;
   std::vector<btRigidBody*> bodies_;
   std::vector<Vec3> kinematic_linear_, kinematic_angular_;
+  FluidForces fluid_forces_;
   Bodies* rigid_ = nullptr;  ///< owned by sim_
   std::unique_ptr<StepWatch> watch_;
   std::unique_ptr<Simulation> sim_;

@@ -324,6 +324,14 @@ double Simulation::step(double t_limit) {
     timings_.boundary += t_penalty;
   }
 
+  if (fluid_forces_) {
+    t0 = Clock::now();
+    fluid_forces_(st, st.acceleration, time_);
+    if (st.acceleration.size() != st.size())
+      throw std::logic_error("FluidForces changed the size of the acceleration array");
+    timings_.forces += secondsSince(t0);
+  }
+
   // Predict: v* = v + dt a, x* = x + dt v* (all forces but direct forcing's).
   t0 = Clock::now();
   const double dt = chooseDt(t_limit);

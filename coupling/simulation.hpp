@@ -14,6 +14,7 @@
 #include "sph/fluid.hpp"
 #include "sph/health.hpp"
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -128,6 +129,16 @@ struct StepTimings {
   double coupling() const { return control + correction + rigid; }
 };
 
+/// Forces of the user's own (wind, a vortex, a magnet, another solver's coupling): called
+/// once per step after the fluid's forces (pressure, viscosity, gravity; with the penalty
+/// method the boundary force too) and before the prediction, the time step and direct
+/// forcing. It adds accelerations (m/s^2) to `acceleration` (n, the particles in the
+/// state's current slot order; `fluid` gives their positions, velocities, ids and
+/// densities; fluid.acceleration is the same array). `time` is the step's start (s). It
+/// must not keep references into the state (slots are reordered every step).
+using FluidForces =
+    std::function<void(const FluidState& fluid, std::vector<Vec3>& acceleration, double time)>;
+
 class Simulation {
  public:
   /// Builds the fluid and boundaries. `rigid` integrates the bodies (same order and count
@@ -145,6 +156,9 @@ class Simulation {
   double step(double t_limit);
   /// Steps until time() reaches t.
   void advanceTo(double t);
+  /// Sets (or, with an empty function, removes) the user's fluid forces (FluidForces).
+  /// Their accelerations count in the time step's limits like the fluid's own.
+  void setFluidForces(FluidForces forces) { fluid_forces_ = std::move(forces); }
 
   double time() const { return time_; }
   std::uint64_t steps() const { return steps_; }
@@ -226,6 +240,7 @@ class Simulation {
   std::vector<Wrench> wall_reaction_;  // scratch: (bodies) its reaction on two-way bodies
   std::size_t last_contacts_ = 0;
   std::optional<HealthError> failure_;  // the error that stopped the run
+  FluidForces fluid_forces_;            // the user's, or empty
 };
 
 /// FNV-1a hash of the fluid's positions and velocities in id order (the benchmarks' and

@@ -55,6 +55,21 @@ CoupledWorldSettings smallFluid() {
   return s;
 }
 
+TEST(CoupledWorld, FluidForcesSetBeforeTheStartAct) {
+  World w;
+  CoupledWorld fluid(w.world, smallFluid());
+  fluid.addFluidBlock(Vec3(-0.05, 0.3, -0.05), Vec3(0.05, 0.4, 0.05));
+  // Set before the first advance(): kept and handed to the simulation when it starts.
+  fluid.setFluidForces([](const FluidState&, std::vector<Vec3>& a, double) {
+    for (Vec3& ai : a)
+      ai.y() += 9.81;  // cancels the world's gravity
+  });
+  fluid.advance(0.05);
+  const FluidState& st = fluid.simulation().fluid().state();
+  for (std::size_t i = 0; i < st.size(); ++i)
+    EXPECT_NEAR(st.velocity[i].y(), 0.0, 1e-4);  // -9.81f as a float: a small remainder
+}
+
 TEST(CoupledWorld, OneBulletStepPerFluidSubStepAndGravityFromTheWorld) {
   World w;
   w.world.setGravity(btVector3(0, -4.0f, 0));
