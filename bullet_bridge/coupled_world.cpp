@@ -137,14 +137,15 @@ class CoupledWorld::Bodies final : public RigidBodies {
       out.insert(out.end(), owner_.kinematic_angular_[b].data(),
                  owner_.kinematic_angular_[b].data() + 3);
     }
+    saveContacts(out);
     return out;
   }
 
   void loadState(const std::vector<double>& state) override {
-    if (state.size() != kPerBody * count())
+    if (state.size() < kPerBody * count() + 1)
       throw std::invalid_argument("rigid-body state: " + std::to_string(state.size()) +
                                   " numbers for " + std::to_string(count()) + " bodies (" +
-                                  std::to_string(kPerBody) + " each)");
+                                  std::to_string(kPerBody) + " each, then the contacts)");
     const double* v = state.data();
     auto get = [&]() {
       const btVector3 out{btScalar(v[0]), btScalar(v[1]), btScalar(v[2])};
@@ -181,6 +182,140 @@ class CoupledWorld::Bodies final : public RigidBodies {
       // Bullet's broadphase must see the bodies where they are now.
       owner_.world_.updateSingleAabb(&body);
     }
+    loadContacts(state, static_cast<std::size_t>(v - state.data()));
+  }
+
+  /// Bullet's contact cache: each contact manifold between coupled bodies, in the
+  /// dispatcher's order (the order its solver visits them), with every field of its
+  /// points (among them the impulses it warm-starts the next step with). Appended as:
+  /// manifold count, then per manifold body0, body1 (indices of coupled bodies), point
+  /// count and kPerPoint numbers per point.
+  static constexpr std::size_t kPerPoint = 5 * 3 + 5 + 5 + 6 + 3 + 1 + 2 * 3;
+
+  void saveContacts(std::vector<double>& out) const {
+    btDispatcher& dispatcher = *owner_.world_.getDispatcher();
+    const std::size_t at = out.size();
+    out.push_back(0.0);
+    std::size_t saved = 0;
+    for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {
+      const btPersistentManifold& manifold = *dispatcher.getManifoldByIndexInternal(m);
+      const int a = indexOf(manifold.getBody0()), b = indexOf(manifold.getBody1());
+      if (a < 0 || b < 0) continue;  // a body of the world that is not coupled
+      ++saved;
+      out.push_back(a);
+      out.push_back(b);
+      out.push_back(manifold.getNumContacts());
+      for (int k = 0; k < manifold.getNumContacts(); ++k)
+        savePoint(manifold.getContactPoint(k), out);
+    }
+    out[at] = double(saved);
+  }
+
+  void loadContacts(const std::vector<double>& state, std::size_t at) {
+    auto fail = [] {
+      throw std::invalid_argument("rigid-body state: the contacts do not fit the bodies");
+    };
+    // The manifolds of the pairs that overlap now, then their points as saved.
+    owner_.world_.performDiscreteCollisionDetection();
+    btDispatcher& dispatcher = *owner_.world_.getDispatcher();
+    std::vector<btPersistentManifold*> live, ordered;
+    for (int m = 0; m < dispatcher.getNumManifolds(); ++m)
+      live.push_back(dispatcher.getManifoldByIndexInternal(m));
+    const std::size_t manifolds = static_cast<std::size_t>(state[at++]);
+    for (std::size_t j = 0; j < manifolds; ++j) {
+      if (at + 3 > state.size()) fail();
+      const std::size_t a = static_cast<std::size_t>(state[at]),
+                        b = static_cast<std::size_t>(state[at + 1]);
+      const int points = static_cast<int>(state[at + 2]);
+      at += 3;
+      if (a >= count() || b >= count() || points < 0 || points > MANIFOLD_CACHE_SIZE ||
+          at + points * kPerPoint > state.size())
+        fail();
+      std::vector<btManifoldPoint> saved(points);
+      for (btManifoldPoint& p : saved)
+        at = loadPoint(state, at, p);
+      // The live manifold of the same pair (and, for compound shapes, the same parts).
+      btPersistentManifold** match = nullptr;
+      for (btPersistentManifold*& m : live) {
+        if (!m || m->getBody0() != owner_.bodies_[a] || m->getBody1() != owner_.bodies_[b])
+          continue;
+        if (!match) match = &m;
+        if (points > 0 && m->getNumContacts() > 0 &&
+            m->getContactPoint(0).m_index0 == saved[0].m_index0 &&
+            m->getContactPoint(0).m_index1 == saved[0].m_index1) {
+          match = &m;
+          break;
+        }
+      }
+      if (!match) continue;  // no longer overlapping: Bullet would have dropped it too
+      btPersistentManifold* manifold = *match;
+      *match = nullptr;
+      manifold->clearManifold();
+      for (const btManifoldPoint& p : saved)
+        manifold->addManifoldPoint(p, true);
+      ordered.push_back(manifold);
+    }
+    if (at != state.size()) fail();
+    // The dispatcher's order as saved; manifolds new since then after them.
+    for (btPersistentManifold* m : live)
+      if (m) ordered.push_back(m);
+    btPersistentManifold** array = dispatcher.getInternalManifoldPointer();
+    for (std::size_t k = 0; k < ordered.size(); ++k) {
+      array[k] = ordered[k];
+      ordered[k]->m_index1a = static_cast<int>(k);
+    }
+  }
+
+  int indexOf(const btCollisionObject* object) const {
+    for (std::size_t b = 0; b < count(); ++b)
+      if (owner_.bodies_[b] == object) return static_cast<int>(b);
+    return -1;
+  }
+
+  static void savePoint(const btManifoldPoint& p, std::vector<double>& out) {
+    for (const btVector3* v : {&p.m_localPointA, &p.m_localPointB, &p.m_positionWorldOnB,
+                               &p.m_positionWorldOnA, &p.m_normalWorldOnB})
+      for (int k = 0; k < 3; ++k)
+        out.push_back(double((*v)[k]));
+    for (const btScalar x : {p.m_distance1, p.m_combinedFriction, p.m_combinedRollingFriction,
+                             p.m_combinedSpinningFriction, p.m_combinedRestitution})
+      out.push_back(double(x));
+    for (const int i : {p.m_partId0, p.m_partId1, p.m_index0, p.m_index1, p.m_contactPointFlags})
+      out.push_back(double(i));
+    for (const btScalar x : {p.m_appliedImpulse, p.m_prevRHS, p.m_appliedImpulseLateral1,
+                             p.m_appliedImpulseLateral2, p.m_contactMotion1, p.m_contactMotion2})
+      out.push_back(double(x));
+    for (const btScalar x : {p.m_contactCFM, p.m_contactERP, p.m_frictionCFM})
+      out.push_back(double(x));
+    out.push_back(double(p.m_lifeTime));
+    for (const btVector3* v : {&p.m_lateralFrictionDir1, &p.m_lateralFrictionDir2})
+      for (int k = 0; k < 3; ++k)
+        out.push_back(double((*v)[k]));
+  }
+
+  static std::size_t loadPoint(const std::vector<double>& in, std::size_t at, btManifoldPoint& p) {
+    auto scalar = [&]() { return btScalar(in[at++]); };
+    auto integer = [&]() { return static_cast<int>(in[at++]); };
+    for (btVector3* v : {&p.m_localPointA, &p.m_localPointB, &p.m_positionWorldOnB,
+                         &p.m_positionWorldOnA, &p.m_normalWorldOnB})
+      for (int k = 0; k < 3; ++k)
+        (*v)[k] = scalar();
+    for (btScalar* x : {&p.m_distance1, &p.m_combinedFriction, &p.m_combinedRollingFriction,
+                        &p.m_combinedSpinningFriction, &p.m_combinedRestitution})
+      *x = scalar();
+    for (int* i : {&p.m_partId0, &p.m_partId1, &p.m_index0, &p.m_index1, &p.m_contactPointFlags})
+      *i = integer();
+    for (btScalar* x : {&p.m_appliedImpulse, &p.m_prevRHS, &p.m_appliedImpulseLateral1,
+                        &p.m_appliedImpulseLateral2, &p.m_contactMotion1, &p.m_contactMotion2})
+      *x = scalar();
+    for (btScalar* x : {&p.m_contactCFM, &p.m_contactERP, &p.m_frictionCFM})
+      *x = scalar();
+    p.m_lifeTime = integer();
+    for (btVector3* v : {&p.m_lateralFrictionDir1, &p.m_lateralFrictionDir2})
+      for (int k = 0; k < 3; ++k)
+        (*v)[k] = scalar();
+    p.m_userPersistentData = nullptr;
+    return at;
   }
 
   void step(double dt, const std::vector<Wrench>& fluid) override {
