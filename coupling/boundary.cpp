@@ -472,36 +472,6 @@ void Boundaries::samplePressure(const Fluid& fluid, SampleSet& set, const Mat3& 
 }
 
 template <class F>
-void Boundaries::forEachContactCandidate(const SampleSet& set, const Vec3& p, F&& f) const {
-  const double reach = radius_ + radius_;  // r_f + r_b
-  const double reach_sq = reach * reach;
-  set.grid.forEachRangeWithin(p, set.sample_reach, [&](std::uint32_t lo, std::uint32_t hi) {
-    for (std::uint32_t k = lo; k < hi; ++k) {
-      const double d_sq = (p - set.position[k]).squaredNorm();
-      if (d_sq < reach_sq) f(k, d_sq);
-    }
-  });
-}
-
-template <class F>
-void Boundaries::forEachSampleNear(const Vec3& x, F&& f) const {
-  if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
-    forEachContactCandidate(static_, x, [&](std::uint32_t k, double d_sq) {
-      f(static_.body[k], nullptr, static_, k, x, d_sq);
-    });
-  }
-  if (!moving_reach_.contains(x)) return;
-  for (const MovingBody& m : moving_) {
-    if (!m.world_reach.contains(x)) continue;
-    const Body& b = bodies_[m.body];
-    const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
-    if (!m.samples.reach_box.contains(p)) continue;
-    forEachContactCandidate(
-        m.samples, p, [&](std::uint32_t k, double d_sq) { f(m.body, &b, m.samples, k, p, d_sq); });
-  }
-}
-
-template <class F>
 void Boundaries::forEachBodyDistance(const Vec3& x, F&& f) const {
   if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
     for (const std::uint32_t bi : static_bodies_) {
@@ -555,41 +525,6 @@ std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxCont
   return kept;
 }
 
-std::size_t Boundaries::penaltyTerms(const Vec3& x, double strength,
-                                     std::array<PenaltyTerm, kMaxContacts>& out) const {
-  const double r0 = radius_ + radius_;
-  std::size_t count = 0;
-  // x_k and a_k in the set's frame; `to_world` rotates (moving bodies) into the world.
-  auto add = [&](std::uint32_t body, const Vec3& xk_world, const Vec3& a_world) {
-    std::size_t c = 0;
-    while (c < count && out[c].body != body)
-      ++c;
-    if (c == count) {
-      if (count == kMaxContacts) return;  // more bodies than slots: the rest are ignored
-      out[count++] = PenaltyTerm{body, Vec3::Zero(), Vec3::Zero()};
-    }
-    out[c].accel += a_world;
-    out[c].moment += xk_world.cross(a_world);
-  };
-  auto term = [&](const Vec3& p, const Vec3& xk, double d_sq) -> Vec3 {
-    if (d_sq <= 0.0) return Vec3::Zero();
-    const double q2 = r0 * r0 / d_sq;  // (r0/d)^2
-    const double q4 = q2 * q2;
-    const double q12 = q4 * q4 * q4;
-    return strength * (q12 - q4) / d_sq * (p - xk);
-  };
-  forEachSampleNear(x, [&](std::uint32_t body, const Body* moving, const SampleSet& set,
-                           std::uint32_t k, const Vec3& p, double d_sq) {
-    const Vec3& xk = set.position[k];
-    if (!moving)
-      add(body, xk, term(p, xk, d_sq));
-    else
-      add(body, moving->rotation * xk + moving->settings.pose.position,
-          moving->rotation * term(p, xk, d_sq));
-  });
-  return count;
-}
-
 bool Boundaries::contactGeometry(const Vec3& x, Contact& ct) const {
   // n = grad SDF at x, x_cp = x - SDF(x) n: edges and corners push the fluid the
   // shortest way out.
@@ -630,122 +565,6 @@ Boundaries::Clearance Boundaries::clearance(const Vec3& x) const {
     if (is_static) c.walls = std::min(c.walls, d);
   });
   return c;
-}
-
-bool Boundaries::projectOut(Vec3& y, double s, int passes) const {
-  const double tolerance = 1e-6 * radius_;
-  std::array<Contact, kMaxContacts> contacts;
-  for (int pass = 0; pass < passes; ++pass) {
-    const std::size_t count = findContacts(y, contacts);
-    bool moved = false;
-    for (std::size_t c = 0; c < count; ++c) {
-      const double d = s - (y - contacts[c].point).dot(contacts[c].normal);
-      if (d > tolerance) {
-        y += d * contacts[c].normal;
-        moved = true;
-      }
-    }
-    if (!moved) return true;
-  }
-  return clearance(y).all >= s - tolerance;
-}
-
-namespace {
-
-/// The 26 directions from a cube's centre to its faces, edges and corners (unit).
-const std::array<Vec3, 26>& cubeDirections() {
-  static const std::array<Vec3, 26> dirs = [] {
-    std::array<Vec3, 26> d;
-    std::size_t k = 0;
-    for (int z = -1; z <= 1; ++z)
-      for (int y = -1; y <= 1; ++y)
-        for (int x = -1; x <= 1; ++x)
-          if (x != 0 || y != 0 || z != 0) d[k++] = Vec3(x, y, z).normalized();
-    return d;
-  }();
-  return dirs;
-}
-
-}  // namespace
-
-bool Boundaries::escape(Vec3& x) const {
-  // Rings half a radius apart out to eight spacings; on each, the 26 directions. The
-  // nearest ring with a point where the particle can have half its radius from every
-  // body wins (its point of most clearance); the straight path to it must not go deeper
-  // into a body than the particle is now (less half a radius), nor into a static body at
-  // all: fluid leaves a closed or too thin gap sideways, never through a wall or a body.
-  const double rf = radius_;
-  const Clearance start = clearance(x);
-  const double now = start.all;
-  const double depth_limit = std::min(now, 0.0) - 0.5 * rf;
-  const double static_limit = std::min(start.walls, 0.0) - 0.5 * rf;
-  const double step = 0.5 * rf;
-  const int rings = 32;   // 16 r_f = 8 spacings
-  double progress = now;  // most clearance reached on an open path (if none has room)
-  Vec3 farthest = x;
-  for (int ring = 1; ring <= rings; ++ring) {
-    double best = -std::numeric_limits<double>::infinity();
-    Vec3 chosen = x;
-    for (const Vec3& u : cubeDirections()) {
-      const Vec3 y = x + (ring * step) * u;
-      const Clearance at = clearance(y);
-      const double c = at.all;
-      if (c <= now || at.walls < static_limit) continue;
-      bool open = true;
-      for (int k = 1; k < ring && open; ++k) {
-        const Clearance q = clearance(x + (k * step) * u);
-        open = q.all >= depth_limit && q.walls >= static_limit;
-      }
-      if (!open) continue;
-      if (c > progress) progress = c, farthest = y;
-      if (c < rf / 16.0 || c <= best) continue;
-      Vec3 room = y;  // half a radius from every body there?
-      if (!projectOut(room, 0.5 * rf, 3)) continue;
-      best = c;
-      chosen = room;
-    }
-    if (best > -std::numeric_limits<double>::infinity()) {
-      Vec3 full = chosen;
-      x = projectOut(full, rf, 4) ? full : chosen;
-      return true;
-    }
-  }
-  x = farthest;  // deep inside a large body, or no way out near: as far out as found
-  return false;
-}
-
-std::size_t Boundaries::correctPositions(std::vector<Vec3>& x,
-                                         const std::vector<std::uint8_t>& candidates) const {
-  if (bodies_.empty()) return 0;
-  const std::int64_t n = static_cast<std::int64_t>(x.size());
-  const double rf = radius_;
-  std::size_t stuck = 0;
-#pragma omp parallel for schedule(dynamic, 256) reduction(+ : stuck)
-  for (std::int64_t i = 0; i < n; ++i) {
-    if (!candidates[i] && !moving_reach_.contains(x[i])) continue;
-    // Full clearance r_f from every body (the usual case: one pass, or a few in corners).
-    Vec3 xi = x[i];
-    if (projectOut(xi, rf, 4)) {
-      x[i] = xi;
-      continue;
-    }
-    // Squeezed: bodies closer than a diameter. The largest clearance they all allow
-    // (r_f / 2 ... r_f / 16), between them at a raised density.
-    bool placed = false;
-    for (double s = 0.5 * rf; s >= rf / 16.0 && !placed; s *= 0.5) {
-      xi = x[i];
-      placed = projectOut(xi, s, 4);
-    }
-    if (placed) {
-      x[i] = xi;
-      continue;
-    }
-    // No room between them (the gap is closed): out of it, sideways.
-    xi = x[i];
-    if (!escape(xi)) ++stuck;
-    x[i] = xi;
-  }
-  return stuck;
 }
 
 std::size_t Boundaries::countInside(const std::vector<Vec3>& x) const {

@@ -136,41 +136,27 @@ class Boundaries {
   /// along the shortest way. The samples only tell where a surface may be near.
   /// Returns how many were written.
   std::size_t findContacts(const Vec3& x, std::array<Contact, kMaxContacts>& out) const;
-  /// Monaghan's penalty force (the paper's baseline, coupling/penalty.hpp) on a fluid
-  /// centre x, per unit fluid mass, from every sample closer than r0 = r_f + r_b:
-  /// a = D [(r0/d)^12 - (r0/d)^4] (x - x_k) / d^2. Per body it writes the acceleration
-  /// sum and the sum of x_k x a_k (moment about the world origin, for the reaction
-  /// torque). Returns the number of bodies written (at most kMaxContacts).
-  struct PenaltyTerm {
-    std::uint32_t body = 0;
-    Vec3 accel = Vec3::Zero();   ///< m/s^2
-    Vec3 moment = Vec3::Zero();  ///< m^2/s^2, sum of x_k x a_k (world)
-  };
-  std::size_t penaltyTerms(const Vec3& x, double strength,
-                           std::array<PenaltyTerm, kMaxContacts>& out) const;
+  /// Calls f(body, x_k, p, d_sq, rotation, origin) for each boundary sample k within
+  /// contact reach (r_f + r_b) of the world point x, over the static bodies and every
+  /// moving one. x_k and p (that is x) are in the frame of the sample's set: the world for
+  /// static bodies (rotation and origin null), the body's frame for moving ones (world =
+  /// *rotation * v + *origin). d_sq = |p - x_k|^2. Used by the penalty force.
+  template <class F>
+  void forEachSampleNear(const Vec3& x, F&& f) const;
   /// True when x may be within contact reach of a moving body.
   bool nearMovingBody(const Vec3& x) const { return moving_reach_.contains(x); }
   bool hasMovingBodies() const { return !moving_.empty(); }
 
-  /// Position correction (eq. 19-20), for every body at once: moves each fluid centre to
-  /// the nearest point at least its radius r_f from every body's exact surface (Gauss-Seidel
-  /// projections on the bodies' tangent planes, contacts found again after each pass, so
-  /// corners and several bodies are handled together). A particle squeezed between bodies
-  /// closer than its diameter cannot have r_f from all of them: it is treated as one chain
-  /// with all its boundaries and placed where the clearance is largest that all of them
-  /// allow (r_f / 2, r_f / 4, ... r_f / 16), between them at a raised density, never pushed
-  /// out of one body into another or through a wall. Where the bodies touch (a gap closed,
-  /// a body moved onto fluid by user code) there is no room between them: the particle
-  /// moves to the nearest point with r_f / 2 from every body, found by a search over 26
-  /// directions out to eight spacings along paths that neither cross a static body nor go
-  /// deeper into any body: squeezed fluid goes sideways, out of the gap, never through a
-  /// wall.
-  /// Particles flagged in `candidates` and particles near a moving body are looked at:
-  /// with static bodies, a particle without a contact at its predicted position x* has
-  /// none at its final one (uncontrolled particles end exactly at x*). Returns the number
-  /// of particles that no move could free (0 unless bodies enclose fluid entirely).
-  std::size_t correctPositions(std::vector<Vec3>& x,
-                               const std::vector<std::uint8_t>& candidates) const;
+  /// How far x is from the bodies' exact surfaces, capped at the fluid radius r_f:
+  /// min(r_f, signed distance of x to the nearest surface within contact reach), over
+  /// all bodies and over the static ones only (position correction, direct_forcing).
+  struct Clearance {
+    double all, walls;
+  };
+  Clearance clearance(const Vec3& x) const;
+  /// The fluid particles' radius r_f (m).
+  double fluidRadius() const { return radius_; }
+  bool empty() const { return bodies_.empty(); }
 
   /// Number of fluid centres strictly inside some body's exact shape.
   std::size_t countInside(const std::vector<Vec3>& x) const;
@@ -219,20 +205,6 @@ class Boundaries {
   /// deep inside): what findContacts and clearance look at.
   template <class F>
   void forEachBodyDistance(const Vec3& x, F&& f) const;
-  /// min(r_f, signed distance of x to the nearest body surface within contact reach): over
-  /// all bodies, and over the static ones only.
-  struct Clearance {
-    double all, walls;
-  };
-  Clearance clearance(const Vec3& x) const;
-  /// Gauss-Seidel projections of y to clearance s from every body in contact, at most
-  /// `passes` passes. True when y ends with clearance >= s (to a tolerance).
-  bool projectOut(Vec3& y, double s, int passes) const;
-  /// Moves x to the nearest point where it can have r_f / 2 from every body, reachable
-  /// without crossing a body (see correctPositions). False when there is none within eight
-  /// spacings: then x moves to the point of most clearance found, if more than it has now.
-  bool escape(Vec3& x) const;
-
   /// Sorts samples into `set` over `box` and computes their volumes.
   void buildSet(SampleSet& set, const Aabb& box, const std::vector<Vec3>& pos,
                 const std::vector<Vec3>& nrm, const std::vector<std::uint32_t>& body, bool flags);
@@ -240,11 +212,6 @@ class Boundaries {
   /// Calls f(k, dist_sq) for each sample k of `set` within contact reach of p (set space).
   template <class F>
   void forEachContactCandidate(const SampleSet& set, const Vec3& p, F&& f) const;
-  /// Calls f(body, moving, set, k, p, dist_sq) for each sample k within contact reach of
-  /// the world point x, over the static set and every moving body. p is x in the set's
-  /// space (world, or the moving body's frame); `moving` is that body (nullptr: static).
-  template <class F>
-  void forEachSampleNear(const Vec3& x, F&& f) const;
   /// Contact point and normal of a fluid centre x from the body's exact shape (its
   /// distance already in ct). False when neither the shape nor a sample gives a normal.
   bool contactGeometry(const Vec3& x, Contact& ct) const;
@@ -281,5 +248,39 @@ class Boundaries {
   static constexpr std::size_t kChunk = 2048;
   mutable std::vector<Wrench> chunk_reaction_;  ///< scratch: (chunks x bodies)
 };
+
+// Template definitions (the penalty force visits samples from coupling/penalty.cpp).
+
+template <class F>
+inline void Boundaries::forEachContactCandidate(const SampleSet& set, const Vec3& p, F&& f) const {
+  const double reach = radius_ + radius_;  // r_f + r_b
+  const double reach_sq = reach * reach;
+  set.grid.forEachRangeWithin(p, set.sample_reach, [&](std::uint32_t lo, std::uint32_t hi) {
+    for (std::uint32_t k = lo; k < hi; ++k) {
+      const double d_sq = (p - set.position[k]).squaredNorm();
+      if (d_sq < reach_sq) f(k, d_sq);
+    }
+  });
+}
+
+template <class F>
+inline void Boundaries::forEachSampleNear(const Vec3& x, F&& f) const {
+  if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
+    forEachContactCandidate(static_, x, [&](std::uint32_t k, double d_sq) {
+      f(static_.body[k], static_.position[k], x, d_sq, static_cast<const Mat3*>(nullptr),
+        static_cast<const Vec3*>(nullptr));
+    });
+  }
+  if (!moving_reach_.contains(x)) return;
+  for (const MovingBody& m : moving_) {
+    if (!m.world_reach.contains(x)) continue;
+    const Body& b = bodies_[m.body];
+    const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
+    if (!m.samples.reach_box.contains(p)) continue;
+    forEachContactCandidate(m.samples, p, [&](std::uint32_t k, double d_sq) {
+      f(m.body, m.samples.position[k], p, d_sq, &b.rotation, &b.settings.pose.position);
+    });
+  }
+}
 
 }  // namespace wake

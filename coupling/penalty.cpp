@@ -22,17 +22,17 @@ std::size_t PenaltyBoundary::apply(const Boundaries& boundaries, const std::vect
     chunk.accel.assign(nb, Vec3::Zero());
     chunk.moment.assign(nb, Vec3::Zero());
     chunk.pairs = 0;
-    std::array<Boundaries::PenaltyTerm, Boundaries::kMaxContacts> terms;
+    Terms found;
     const std::size_t end = std::min(n, static_cast<std::size_t>(c + 1) * kChunk);
     for (std::size_t i = static_cast<std::size_t>(c) * kChunk; i < end; ++i) {
-      const std::size_t count = boundaries.penaltyTerms(x[i], strength_, terms);
+      const std::size_t count = terms(boundaries, x[i], found);
       if (count == 0) continue;
       in_contact[i] = 1;
       chunk.pairs += count;
       for (std::size_t t = 0; t < count; ++t) {
-        accel[i] += terms[t].accel;
-        chunk.accel[terms[t].body] += terms[t].accel;
-        chunk.moment[terms[t].body] += terms[t].moment;
+        accel[i] += found[t].accel;
+        chunk.accel[found[t].body] += found[t].accel;
+        chunk.moment[found[t].body] += found[t].moment;
       }
     }
   }
@@ -50,6 +50,39 @@ std::size_t PenaltyBoundary::apply(const Boundaries& boundaries, const std::vect
     }
   }
   return pairs;
+}
+
+std::size_t PenaltyBoundary::terms(const Boundaries& boundaries, const Vec3& x, Terms& out) const {
+  const double r0 = 2.0 * boundaries.fluidRadius();
+  const double strength = strength_;
+  std::size_t count = 0;
+  // x_k and a_k in the set's frame; `to_world` rotates (moving bodies) into the world.
+  auto add = [&](std::uint32_t body, const Vec3& xk_world, const Vec3& a_world) {
+    std::size_t c = 0;
+    while (c < count && out[c].body != body)
+      ++c;
+    if (c == count) {
+      if (count == out.size()) return;  // more bodies than slots: the rest are ignored
+      out[count++] = Term{body, Vec3::Zero(), Vec3::Zero()};
+    }
+    out[c].accel += a_world;
+    out[c].moment += xk_world.cross(a_world);
+  };
+  auto term = [&](const Vec3& p, const Vec3& xk, double d_sq) -> Vec3 {
+    if (d_sq <= 0.0) return Vec3::Zero();
+    const double q2 = r0 * r0 / d_sq;  // (r0/d)^2
+    const double q4 = q2 * q2;
+    const double q12 = q4 * q4 * q4;
+    return strength * (q12 - q4) / d_sq * (p - xk);
+  };
+  boundaries.forEachSampleNear(x, [&](std::uint32_t body, const Vec3& xk, const Vec3& p,
+                                      double d_sq, const Mat3* rotation, const Vec3* origin) {
+    if (!rotation)
+      add(body, xk, term(p, xk, d_sq));
+    else
+      add(body, *rotation * xk + *origin, *rotation * term(p, xk, d_sq));
+  });
+  return count;
 }
 
 }  // namespace wake

@@ -11,6 +11,7 @@
 #include "coupling/boundary.hpp"
 #include "coupling/rigid_body.hpp"
 
+#include <array>
 #include <vector>
 
 namespace wake {
@@ -35,6 +36,18 @@ class PenaltyBoundary {
   std::size_t apply(const Boundaries& boundaries, const std::vector<Vec3>& x,
                     std::vector<Vec3>& accel, std::vector<std::uint8_t>& in_contact,
                     std::vector<Wrench>& wrench);
+
+  /// The penalty force on a fluid centre x, per unit fluid mass, from every sample closer
+  /// than r0 = r_f + r_b: a = D [(r0/d)^12 - (r0/d)^4] (x - x_k) / d^2. Per body it writes
+  /// the acceleration sum and the sum of x_k x a_k (moment about the world origin, for the
+  /// reaction torque). Returns the number of bodies written (at most kMaxContacts).
+  struct Term {
+    std::uint32_t body = 0;
+    Vec3 accel = Vec3::Zero();   ///< m/s^2
+    Vec3 moment = Vec3::Zero();  ///< m^2/s^2, sum of x_k x a_k (world)
+  };
+  using Terms = std::array<Term, Boundaries::kMaxContacts>;
+  std::size_t terms(const Boundaries& boundaries, const Vec3& x, Terms& out) const;
 
  private:
   struct Chunk {

@@ -1,5 +1,7 @@
 #include "coupling/simulation.hpp"
 
+#include "sph/time_step.hpp"
+
 #include <omp.h>
 
 #include <algorithm>
@@ -261,8 +263,6 @@ void Simulation::placeBodies(const std::vector<RigidState>& states) {
 }
 
 double Simulation::chooseDt(double t_limit) const {
-  const FluidParams& f = settings_.fluid;
-  const double h = f.smoothingLength();
   // Fluid at a moving body's surface takes on its speed: count surface speeds too.
   double v_max = fluid_->maxSpeed();
   for (std::size_t b = 0; b < boundaries_->bodyCount(); ++b) {
@@ -271,14 +271,8 @@ double Simulation::chooseDt(double t_limit) const {
     v_max = std::max(
         v_max, s.linear_velocity.norm() + s.angular_velocity.norm() * boundaries_->bodyExtent(b));
   }
-  const double a_max = fluid_->maxAcceleration();
-  double dt = settings_.max_dt;
-  dt = std::min(dt, settings_.cfl * h / (f.speed_of_sound + v_max));
-  if (a_max > 0) dt = std::min(dt, 0.25 * std::sqrt(h / a_max));
-  // No particle may move more than its radius in one step (towards a boundary or not).
-  if (v_max > 0) dt = std::min(dt, f.particle_radius / v_max);
-  // Explicit viscosity (Morris et al. 1997): dt <= 0.125 H^2 / nu.
-  if (nu_max_ > 0) dt = std::min(dt, 0.125 * h * h / nu_max_);
+  const double dt = stableTimeStep(settings_.fluid, settings_.cfl, settings_.max_dt, v_max,
+                                   fluid_->maxAcceleration(), nu_max_);
   const double remaining = t_limit - time_;
   // Land exactly on t_limit, and never leave a sliver step behind.
   if (remaining <= dt) return remaining;
@@ -335,15 +329,7 @@ double Simulation::step(double t_limit) {
   // Predict: v* = v + dt a, x* = x + dt v* (all forces but direct forcing's).
   t0 = Clock::now();
   const double dt = chooseDt(t_limit);
-  const std::int64_t n = static_cast<std::int64_t>(st.size());
-  x_pred_.resize(st.size());
-  v_old_.resize(st.size());
-#pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < n; ++i) {
-    v_old_[i] = st.velocity[i];
-    st.velocity[i] += dt * st.acceleration[i];
-    x_pred_[i] = st.position[i] + dt * st.velocity[i];  // x*, predicted
-  }
+  fluid_->predict(dt, x_pred_, v_old_);
   timings_.integration += secondsSince(t0);
 
   // Bodies predicted over dt without fluid forces; contacts and velocity control there.
@@ -384,16 +370,14 @@ double Simulation::step(double t_limit) {
   timings_.rigid += secondsSince(t0);
 
   t0 = Clock::now();
-#pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < n; ++i)
-    st.position[i] += dt * st.velocity[i];
+  fluid_->integratePositions(dt);
   timings_.integration += secondsSince(t0);
 
   // Position correction against the bodies' final poses.
   t0 = Clock::now();
   placeBodies(body_final_);
   if (!penalty_ && (control.particles > 0 || boundaries_->hasMovingBodies()))
-    boundaries_->correctPositions(st.position, flags_);
+    correctPositions(*boundaries_, st.position, flags_);
   const double t_correction = secondsSince(t0);
   timings_.correction += t_correction;
   timings_.boundary += t_correction;

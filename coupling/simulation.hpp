@@ -9,6 +9,7 @@
 #include "coupling/boundary.hpp"
 #include "coupling/direct_forcing.hpp"
 #include "coupling/penalty.hpp"
+#include "coupling/position_correction.hpp"
 #include "coupling/rigid_body.hpp"
 #include "geometry/shape.hpp"
 #include "sph/fluid.hpp"

@@ -229,4 +229,25 @@ double Fluid::maxAcceleration() const {
   return std::sqrt(m);
 }
 
+void Fluid::predict(double dt, std::vector<Vec3>& x_pred, std::vector<Vec3>& v_old) {
+  FluidState& st = state_;
+  const std::int64_t n = static_cast<std::int64_t>(st.size());
+  x_pred.resize(st.size());
+  v_old.resize(st.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i) {
+    v_old[i] = st.velocity[i];
+    st.velocity[i] += dt * st.acceleration[i];
+    x_pred[i] = st.position[i] + dt * st.velocity[i];
+  }
+}
+
+void Fluid::integratePositions(double dt) {
+  FluidState& st = state_;
+  const std::int64_t n = static_cast<std::int64_t>(st.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i)
+    st.position[i] += dt * st.velocity[i];
+}
+
 }  // namespace wake

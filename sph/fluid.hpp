@@ -115,6 +115,12 @@ class Fluid {
   /// 4 % at r = H / 2.
   void computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& extra = {});
 
+  /// The step's prediction with every force but the boundaries' control:
+  /// v* = v + dt a (in the state), x* = x + dt v* (into x_pred); v_old keeps v.
+  void predict(double dt, std::vector<Vec3>& x_pred, std::vector<Vec3>& v_old);
+  /// x += dt v: the step's integration with the final velocities.
+  void integratePositions(double dt);
+
   /// Largest |v| and |a| over the particles (0 when empty).
   double maxSpeed() const;
   /// Largest kinematic viscosity of any particle (m^2/s).

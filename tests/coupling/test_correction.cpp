@@ -1,8 +1,9 @@
-// Position correction with several bodies at once (Boundaries::correctPositions): fluid
-// squeezed between a moving body and a wall stays between them at a reduced clearance,
-// fluid caught in a closed gap leaves it sideways, and fluid inside a body that was moved
-// onto it is expelled to the nearest free side, never through the floor.
+// Position correction with several bodies at once (correctPositions,
+// coupling/position_correction.hpp): fluid squeezed between a moving body and a wall stays between
+// them at a reduced clearance, fluid caught in a closed gap leaves it sideways, and fluid inside a
+// body that was moved onto it is expelled to the nearest free side, never through the floor.
 #include "coupling/boundary.hpp"
+#include "coupling/position_correction.hpp"
 #include "test_support.hpp"
 
 #include <random>
@@ -55,7 +56,7 @@ TEST(Correction, SqueezedParticleStaysInTheGapClearOfBoth) {
       for (double px = -0.02; px <= 0.02 + 1e-12; px += 0.01)
         x.emplace_back(px, y, 0.013 * px / 0.02);
     const std::vector<std::uint8_t> all(x.size(), 1);
-    EXPECT_EQ(b->correctPositions(x, all), 0u);
+    EXPECT_EQ(correctPositions(*b, x, all), 0u);
     EXPECT_EQ(b->countInside(x), 0u) << "gap " << gap;
     for (const Vec3& p : x) {
       EXPECT_GE(floorDistance(*b, p), 0.24 * gap) << "gap " << gap << " at " << p.transpose();
@@ -79,7 +80,7 @@ TEST(Correction, FluidInAClosedGapLeavesSidewaysNeverThroughTheFloor) {
           start.push_back(Vec3(u, 0.3 * kR, w));
       std::vector<Vec3> x = start;
       const std::vector<std::uint8_t> all(x.size(), 1);
-      EXPECT_EQ(b->correctPositions(x, all), 0u);
+      EXPECT_EQ(correctPositions(*b, x, all), 0u);
       EXPECT_EQ(b->countInside(x), 0u) << "gap " << gap << " angle " << angle;
       for (std::size_t i = 0; i < x.size(); ++i) {
         const Vec3 local = b->body(1).pose.toBody(start[i]);
@@ -110,7 +111,7 @@ TEST(Correction, FluidInsideABodyMovedOntoItGoesToTheNearestFreeSide) {
     start.emplace_back(ux(rng), uy(rng), uz(rng));
   std::vector<Vec3> x = start;
   const std::vector<std::uint8_t> all(x.size(), 1);
-  const std::size_t stuck = b->correctPositions(x, all);
+  const std::size_t stuck = correctPositions(*b, x, all);
   EXPECT_EQ(stuck, 0u);
   EXPECT_EQ(b->countInside(x), 0u);
   for (std::size_t i = 0; i < x.size(); ++i) {
@@ -130,7 +131,7 @@ TEST(Correction, ParticlesAwayFromBodiesDoNotMove) {
   std::vector<Vec3> x = {Vec3(0.1, 0.05, 0), Vec3(0, 0.066, 0), Vec3(0.0, 1.0 * kR, 0.1)};
   const std::vector<Vec3> start = x;
   const std::vector<std::uint8_t> all(x.size(), 1);
-  EXPECT_EQ(b->correctPositions(x, all), 0u);
+  EXPECT_EQ(correctPositions(*b, x, all), 0u);
   for (std::size_t i = 0; i < x.size(); ++i)
     EXPECT_EQ(x[i], start[i]);
 }
