@@ -118,9 +118,12 @@ double autoSpeedOfSound(const SimulationSettings& s) {
 }
 
 Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies> rigid)
-    : settings_(std::move(settings)), rigid_(std::move(rigid)), forcing_(settings_.fluid) {
-  validate(settings_);
-  SimulationSettings& s = settings_;
+    : settings_(std::move(settings)),
+      model_(settings_),
+      rigid_(std::move(rigid)),
+      forcing_(model_.fluid) {
+  validate(model_);
+  SimulationSettings& s = model_;  // "auto" values are resolved here, in the model only
   if (s.fluid.speed_of_sound <= 0) s.fluid.speed_of_sound = autoSpeedOfSound(s);
   if (s.method == CouplingMethod::Penalty) {
     if (s.penalty_strength <= 0)
@@ -221,12 +224,12 @@ void Simulation::removeOutsideDomain() {
       non_finite = true;
       continue;
     }
-    const bool outside = !settings_.domain.contains(st.position[i]);
+    const bool outside = !model_.domain.contains(st.position[i]);
     flags_[i] = outside;
     out += outside;
   }
   if (non_finite)
-    fail(checkFluidHealth(st, settings_.fluid.rest_density, settings_.health.max_density_ratio));
+    fail(checkFluidHealth(st, model_.fluid.rest_density, model_.health.max_density_ratio));
   if (out == 0) return;
   st.removeIf(flags_);
   lost_ += out;
@@ -234,7 +237,7 @@ void Simulation::removeOutsideDomain() {
 
 void Simulation::fail(const FluidHealth& health) {
   const FluidState& st = fluid_->state();
-  const FluidParams& f = settings_.fluid;
+  const FluidParams& f = model_.fluid;
   const std::size_t i = health.slot;
   const Vec3 x = st.position[i];
   std::ostringstream m;
@@ -242,15 +245,15 @@ void Simulation::fail(const FluidHealth& health) {
     << x.x() << ", " << x.y() << ", " << x.z() << ") m has "
     << describeProblem(health, st, f.rest_density);
   if (health.problem == FluidHealth::Problem::DensityRatio) {
-    m << ", above health.max_density_ratio = " << settings_.health.max_density_ratio
+    m << ", above health.max_density_ratio = " << model_.health.max_density_ratio
       << ": the fluid is compressed far more than a weakly compressible fluid may be; raise "
          "fluid.speed_of_sound (now "
       << f.speed_of_sound
       << " m/s; \"auto\" picks one for the scene), or raise health.max_density_ratio if such "
          "a density is expected";
   } else {
-    m << ": the step became unstable; lower time.cfl (now " << settings_.cfl
-      << ") or time.max_dt (now " << settings_.max_dt << " s), or raise fluid.speed_of_sound (now "
+    m << ": the step became unstable; lower time.cfl (now " << model_.cfl
+      << ") or time.max_dt (now " << model_.max_dt << " s), or raise fluid.speed_of_sound (now "
       << f.speed_of_sound << " m/s)";
   }
   failure_.emplace(m.str(), steps_, time_, st.id[i], x);
@@ -271,7 +274,7 @@ double Simulation::chooseDt(double t_limit) const {
     v_max = std::max(
         v_max, s.linear_velocity.norm() + s.angular_velocity.norm() * boundaries_->bodyExtent(b));
   }
-  const double dt = stableTimeStep(settings_.fluid, settings_.cfl, settings_.max_dt, v_max,
+  const double dt = stableTimeStep(model_.fluid, model_.cfl, model_.max_dt, v_max,
                                    fluid_->maxAcceleration(), nu_max_);
   const double remaining = t_limit - time_;
   // Land exactly on t_limit, and never leave a sliver step behind.
@@ -302,12 +305,12 @@ double Simulation::step(double t_limit) {
   timings_.density += secondsSince(t0);
   t0 = Clock::now();
   // The walls' pressure force: the samples at the fluid's pressure there.
-  boundaries_->computeSamplePressure(*fluid_, settings_.gravity);
+  boundaries_->computeSamplePressure(*fluid_, model_.gravity);
   boundaries_->addWallPressure(*fluid_, wall_shear_, wall_reaction_);
   timings_.boundary += secondsSince(t0);
 
   t0 = Clock::now();
-  fluid_->computeAccelerations(settings_.gravity, wall_shear_);
+  fluid_->computeAccelerations(model_.gravity, wall_shear_);
   timings_.forces += secondsSince(t0);
   if (penalty_) {
     // Baseline: boundary forces join the fluid's forces; no control, no correction.
@@ -348,7 +351,7 @@ double Simulation::step(double t_limit) {
     for (std::size_t b = 0; b < nb; ++b)
       pred_states[b] = body_pred_[b].state;
     placeBodies(pred_states);
-    control = forcing_.control(*boundaries_, settings_.method, dt, x_pred_, v_old_, body_now_,
+    control = forcing_.control(*boundaries_, model_.method, dt, x_pred_, v_old_, body_now_,
                                body_pred_, st.velocity, flags_, wrench_);
     last_contacts_ = control.contacts;
     const double t_control = secondsSince(t0);
@@ -389,7 +392,7 @@ double Simulation::step(double t_limit) {
   // Health: finite positions and velocities, the density ratio's limit; penetration
   // against the exact shapes.
   const FluidHealth health =
-      checkFluidHealth(st, settings_.fluid.rest_density, settings_.health.max_density_ratio);
+      checkFluidHealth(st, model_.fluid.rest_density, model_.health.max_density_ratio);
   if (!health.ok()) fail(health);
   const double ratio = health.max_density_ratio;
   const std::size_t penetrating = countPenetrating();

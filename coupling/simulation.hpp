@@ -151,7 +151,7 @@ class Simulation {
 
   /// Advances one time step (CFL-limited, never beyond `t_limit`); returns dt taken.
   /// Checks the fluid's health after the step (and non-finite positions before it):
-  /// throws HealthError when a limit of settings().health is broken or a position or
+  /// throws HealthError when a limit of model().health is broken or a position or
   /// velocity is not finite. The simulation then stays stopped: every later step()
   /// throws the same error.
   double step(double t_limit);
@@ -163,7 +163,11 @@ class Simulation {
 
   double time() const { return time_; }
   std::uint64_t steps() const { return steps_; }
+  /// The settings as given (speed_of_sound 0 = "auto", an empty domain, ...).
   const SimulationSettings& settings() const { return settings_; }
+  /// The run's constant model: the settings with every automatic value resolved (speed of
+  /// sound, domain, penalty strength). What the step uses.
+  const SimulationSettings& model() const { return model_; }
   const Fluid& fluid() const { return *fluid_; }
   Fluid& fluid() { return *fluid_; }
   const Boundaries& boundaries() const { return *boundaries_; }
@@ -216,7 +220,8 @@ class Simulation {
   /// Shows every moving body to the boundaries at the given states.
   void placeBodies(const std::vector<RigidState>& states);
 
-  SimulationSettings settings_;
+  const SimulationSettings settings_;  // as given
+  SimulationSettings model_;           // resolved in the constructor, constant after
   std::unique_ptr<Fluid> fluid_;
   std::unique_ptr<Boundaries> boundaries_;
   std::unique_ptr<RigidBodies> rigid_;

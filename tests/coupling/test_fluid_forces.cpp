@@ -94,5 +94,22 @@ TEST(FluidForces, TheBodiesFeelThemThroughTheFluid) {
   EXPECT_LT(run(true), -0.05);
 }
 
+TEST(Model, AutomaticValuesAreResolvedInTheModelNotInTheSettings) {
+  SimulationSettings given = freeBlock();
+  given.fluid.speed_of_sound = 0.0;  // "auto"
+  given.domain = Aabb{};             // automatic
+  given.method = CouplingMethod::Penalty;
+  given.penalty_strength = 0.0;  // automatic
+  const Simulation sim(given);
+  EXPECT_EQ(sim.settings().fluid.speed_of_sound, 0.0);
+  EXPECT_TRUE(sim.settings().domain.empty());
+  EXPECT_EQ(sim.settings().penalty_strength, 0.0);
+  EXPECT_GT(sim.model().fluid.speed_of_sound, 0.0);
+  EXPECT_EQ(sim.model().fluid.speed_of_sound, sim.fluid().params().speed_of_sound);
+  EXPECT_EQ(sim.model().fluid.speed_of_sound, autoSpeedOfSound(given));
+  EXPECT_FALSE(sim.model().domain.empty());
+  EXPECT_EQ(sim.model().penalty_strength, defaultPenaltyStrength(sim.model().fluid.speed_of_sound));
+}
+
 }  // namespace
 }  // namespace wake
