@@ -1,4 +1,4 @@
-// The front of the fluid on a slip ramp (demos/scenes/slip_ramp.json): one definition for
+// The front of the fluid on a slip ramp (scenes/slip_ramp.json): one definition for
 // the scene test (tests/scenes) and the plot's tool (demos/slip_fronts.cpp).
 #pragma once
 

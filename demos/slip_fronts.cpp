@@ -2,7 +2,7 @@
 //
 //   wake_slip_fronts SCENE [MAX_DT]
 //
-// Runs SCENE (demos/scenes/slip_ramp.json or one like it: static bodies named ramp_*,
+// Runs SCENE (scenes/slip_ramp.json or one like it: static bodies named ramp_*,
 // tilted boxes whose own +x points downhill, each with a lane of fluid 12 cm wide around
 // its centre's z) and prints, per output frame, how far each ramp's front (slipFront, as
 // the scene test measures it) has travelled downhill from where it starts (m). MAX_DT

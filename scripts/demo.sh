@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 BUILD_DIR=build bash scripts/build.sh
-./build/io/wake run demos/scenes/dam_break.json --out out/dam_break "$@"
+./build/io/wake run scenes/dam_break.json --out out/dam_break "$@"
 ./build/io/wake render out/dam_break --every 3
 bash scripts/plot.sh out/dam_break
 echo "[wake] output in out/dam_break:"; ls -l out/dam_break

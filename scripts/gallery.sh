@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # README's gallery, made with Wake's own commands: plays every demo scene in
-# demos/scenes/ at its default resolution (wake run), draws one chosen frame of each
+# scenes/ at its default resolution (wake run), draws one chosen frame of each
 # (wake render) into demos/gallery/<scene>.png and plots the time series of a few
 # (scripts/plot.sh) into demos/gallery/<scene>_<plot>.png.
 #
@@ -36,15 +36,15 @@ for arg in "$@"; do
   if [[ "$arg" == --reuse ]]; then reuse=1; else scenes+=("$arg"); fi
 done
 if ((${#scenes[@]} == 0)); then
-  for f in demos/scenes/*.json; do scenes+=("$(basename "$f" .json)"); done
+  for f in scenes/*.json; do scenes+=("$(basename "$f" .json)"); done
 fi
 mkdir -p demos/gallery
 for name in "${scenes[@]}"; do
   out=out/gallery/$name
   if ((reuse == 0)) || [[ ! -f "$out/summary.json" ]]; then
-    "$wake" run "demos/scenes/$name.json" --out "$out" --quiet
+    "$wake" run "scenes/$name.json" --out "$out" --quiet
   fi
-  rate=$(sed -n 's/.*"frame_rate": *\([0-9.]*\).*/\1/p' "demos/scenes/$name.json" | head -1)
+  rate=$(sed -n 's/.*"frame_rate": *\([0-9.]*\).*/\1/p' "scenes/$name.json" | head -1)
   t=${still[$name]:-0.5}
   frame=$(awk -v t="$t" -v r="$rate" 'BEGIN { printf "%d", t * r + 0.5 }')
   # shellcheck disable=SC2086 # the look is a list of options

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the closed OBJ meshes of demos/scenes/flotsam.json (demos/scenes/meshes/).
+"""Writes the closed OBJ meshes of scenes/flotsam.json (scenes/meshes/).
 
 Each mesh is centred on its centroid (Wake and Bullet take the mesh origin as the centre
 of mass). Run from the repository root: python3 scripts/make_flotsam_meshes.py
@@ -8,7 +8,7 @@ import math
 import os
 import random
 
-OUT = os.path.join("demos", "scenes", "meshes")
+OUT = os.path.join("scenes", "meshes")
 
 
 def write(name, verts, faces, comment):

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# README's slip plot: the fronts on the three ramps of demos/scenes/slip_ramp.json
+# README's slip plot: the fronts on the three ramps of scenes/slip_ramp.json
 # (slip 0, 0.5, 1) over time, at the scene's own (CFL) step and with time.max_dt forcing
 # a step 4x smaller, into demos/gallery/slip_ramp_fronts.png (and the CSVs beside it in
 # out/slip_plot/).
@@ -13,7 +13,7 @@ fronts=./build/demos/wake_slip_fronts
 [[ -x "$fronts" ]] || { echo "slip_plot.sh: error: build first (bash scripts/build.sh)" >&2; exit 1; }
 command -v gnuplot >/dev/null 2>&1 ||
   { echo "slip_plot.sh: error: gnuplot is not installed (apt-get install gnuplot-nox)" >&2; exit 1; }
-scene=demos/scenes/slip_ramp.json
+scene=scenes/slip_ramp.json
 out=out/slip_plot
 mkdir -p "$out" demos/gallery
 

@@ -1,5 +1,5 @@
 // Checks of the demo scenes that are not the paper's experiments, on the output that
-// `wake run` wrote for demos/scenes/<name>.json.
+// `wake run` wrote for scenes/<name>.json.
 #include "scene_output.hpp"
 
 #include <gtest/gtest.h>

@@ -1,5 +1,5 @@
 // The paper's experiments (Sec. VI) as demo scenes: checks of what each one claims, on
-// the output that `wake run` wrote for demos/scenes/<name>.json (tests/CMakeLists.txt
+// the output that `wake run` wrote for scenes/<name>.json (tests/CMakeLists.txt
 // runs every scene first, as the test scene_<name>).
 #include "scene_output.hpp"
 

@@ -29,7 +29,7 @@ std::string h5Path(const std::string& dir, const std::string& name) {
 
 SceneOutput::SceneOutput(const std::string& name)
     : dir_(std::string(WAKE_SCENE_RUNS) + "/" + name),
-      scene_(loadScene(std::string(WAKE_SOURCE_DIR) + "/demos/scenes/" + name + ".json")) {
+      scene_(loadScene(std::string(WAKE_SOURCE_DIR) + "/scenes/" + name + ".json")) {
   std::ifstream summary(dir_ + "/summary.json");
   if (!summary)
     throw std::runtime_error(dir_ + "/summary.json is missing: run the scene_" + name +

@@ -29,7 +29,7 @@ struct BodyTrack {
 
 class SceneOutput {
  public:
-  /// Loads demos/scenes/<name>.json and the run's output in WAKE_SCENE_RUNS/<name>/.
+  /// Loads scenes/<name>.json and the run's output in WAKE_SCENE_RUNS/<name>/.
   /// Fails the calling test (gtest assertions) when something is missing.
   explicit SceneOutput(const std::string& name);
   ~SceneOutput();
