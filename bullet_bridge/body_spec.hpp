@@ -41,11 +41,10 @@ struct ShapeChild {
   Pose pose;  ///< child -> parent
 };
 
-/// One rigid body of a scene.
-struct BodySpec {
-  std::string name;
+/// One rigid body of a scene: how it meets the fluid (name, slip, restitution, coupling:
+/// BodyFluidSettings), its kind, shape, start state, mass and Bullet friction.
+struct BodySpec : BodyFluidSettings {
   BodyKind kind = BodyKind::Static;
-  CouplingMode coupling = CouplingMode::TwoWay;  ///< dynamic bodies only
   ShapeSpec shape;
   /// Pose of the shape's frame (the frame its fields are given in). For a compound the
   /// centre of mass may differ from this origin; the body's reported position is always
@@ -55,8 +54,6 @@ struct BodySpec {
   Vec3 angular_velocity = Vec3::Zero();  ///< rad/s
   double mass = 0.0;                     ///< kg; dynamic bodies give mass or density (> 0)
   double density = 0.0;                  ///< kg/m^3
-  double slip = 0.0;                     ///< eps in [0, 1] towards the fluid
-  double restitution = 0.0;              ///< delta in [0, 1] towards the fluid
   double friction = 0.5;                 ///< Bullet's body-body friction coefficient, >= 0
 };
 

@@ -414,7 +414,7 @@ void CoupledWorld::start() {
   for (std::size_t b = 0; b < bodies_.size(); ++b) {
     const btRigidBody& body = *bodies_[b];
     BodySettings bs;
-    bs.name = couplings_[b].name;
+    static_cast<BodyFluidSettings&>(bs) = couplings_[b];
     bs.kind = kindOf(body);
     bs.coupling = bs.kind == BodyKind::Dynamic ? couplings_[b].coupling : CouplingMode::OneWay;
     try {
@@ -432,8 +432,6 @@ void CoupledWorld::start() {
       bs.mass = 1.0 / double(body.getInvMass());
       bs.inertia = toVec(body.getLocalInertia());
     }
-    bs.slip = couplings_[b].slip;
-    bs.restitution = couplings_[b].restitution;
     s.bodies.push_back(std::move(bs));
   }
   auto rigid = std::make_unique<Bodies>(*this);

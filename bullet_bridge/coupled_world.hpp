@@ -43,15 +43,13 @@ namespace wake {
 /// scene file's. Gravity comes from the Bullet world.
 using CoupledWorldSettings = SolverSettings;
 
-/// How one Bullet body meets the fluid.
-struct BodyCoupling {
+/// How one Bullet body meets the fluid: BodyFluidSettings (name, default "body<k>";
+/// slip; restitution; coupling, for dynamic bodies) and, optionally, its exact shape.
+struct BodyCoupling : BodyFluidSettings {
   BodyCoupling(std::string name_ = {}, double slip_ = 0.0, double restitution_ = 0.0,
                CouplingMode coupling_ = CouplingMode::TwoWay)
-      : name(std::move(name_)), slip(slip_), restitution(restitution_), coupling(coupling_) {}
-  std::string name;                              ///< for output; default "body<k>"
-  double slip = 0.0;                             ///< eps in [0, 1]: 0 no-slip, 1 free slip
-  double restitution = 0.0;                      ///< delta in [0, 1]: 0 inelastic
-  CouplingMode coupling = CouplingMode::TwoWay;  ///< dynamic bodies: one_way = heavy
+      : BodyFluidSettings{std::move(name_), slip_, restitution_, coupling_} {}
+  BodyCoupling(const BodyFluidSettings& fluid) : BodyFluidSettings(fluid) {}
   /// Exact surface to sample, in the body's centre-of-mass frame. Default (null): read
   /// from the body's collision shape (bullet_bridge/bullet_shapes.hpp).
   std::shared_ptr<const Shape> shape;

@@ -107,11 +107,7 @@ SceneWorld::SceneWorld(const SimulationSettings& sim, const std::vector<BodySpec
       body->setAngularVelocity(toBt(spec.angular_velocity));
     }
     world.addRigidBody(body.get());
-    BodyCoupling c;
-    c.name = spec.name;
-    c.slip = spec.slip;
-    c.restitution = spec.restitution;
-    c.coupling = spec.coupling;
+    BodyCoupling c(static_cast<const BodyFluidSettings&>(spec));
     if (spec.shape.type == "tank") c.shape = shape.exact;  // the container, not 5 boxes
     coupled_->couple(body.get(), c);
     bullet_->motion.push_back(std::move(motion));

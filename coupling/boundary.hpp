@@ -22,21 +22,16 @@
 
 namespace wake {
 
-/// One rigid body as the coupling sees it.
-struct BodySettings {
-  std::string name;
+/// One rigid body as the coupling sees it: how it meets the fluid (name, slip,
+/// restitution, coupling: BodyFluidSettings), its shape, start state and mass properties.
+struct BodySettings : BodyFluidSettings {
   BodyKind kind = BodyKind::Static;
-  CouplingMode coupling = CouplingMode::TwoWay;  ///< dynamic bodies only
   std::shared_ptr<const Shape> shape;    ///< exact shape, body space (origin = centre of mass)
   Pose pose;                             ///< body -> world; position = centre of mass
   Vec3 linear_velocity = Vec3::Zero();   ///< m/s, world
   Vec3 angular_velocity = Vec3::Zero();  ///< rad/s, world
   double mass = 0.0;                     ///< kg, dynamic bodies (SimpleRigidBodies)
   Vec3 inertia = Vec3::Zero();           ///< kg m^2, principal moments, body space
-  /// eps in [0, 1]: the wall exerts (1 - eps) times the viscous shear stress of a no-slip
-  /// wall (Boundaries::addWallTerms): 0 no-slip, 1 free slip. Independent of the step.
-  double slip = 0.0;
-  double restitution = 0.0;  ///< delta in [0, 1]: 0 inelastic
 
   bool moves() const { return kind != BodyKind::Static; }
   /// True when the fluid's forces act on the body.

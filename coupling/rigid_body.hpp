@@ -21,6 +21,20 @@ enum class BodyKind { Static, Kinematic, Dynamic };
 /// feels nothing (static and kinematic bodies always; a heavy dynamic body may choose it).
 enum class CouplingMode { TwoWay, OneWay };
 
+/// How a body meets the fluid: the part of a body's settings that every description of a
+/// body shares (the scene's BodySpec, CoupledWorld's BodyCoupling, the coupling's
+/// BodySettings), with one set of defaults.
+struct BodyFluidSettings {
+  std::string name;  ///< unique; output names (HDF5 group, summary, series)
+  /// eps in [0, 1] towards the fluid: the wall exerts (1 - eps) times the viscous shear
+  /// stress of a no-slip wall (Boundaries::addWallTerms): 0 no-slip, 1 free slip.
+  double slip = 0.0;
+  double restitution = 0.0;  ///< delta in [0, 1] towards the fluid: 0 inelastic
+  /// Dynamic bodies: two-way (the fluid's forces act on the body) or one-way (a heavy
+  /// body that pushes the fluid but feels nothing). Static and kinematic: one-way.
+  CouplingMode coupling = CouplingMode::TwoWay;
+};
+
 /// Position, orientation and velocities of a rigid body.
 struct RigidState {
   Pose pose;                             ///< body -> world; position = centre of mass

@@ -168,10 +168,10 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
   for (const BodySettings& b : s.bodies)
     boundaries_->addBody(b);
   boundaries_->finalize();
-  body_now_.resize(s.bodies.size());
+  work_.body_now.resize(s.bodies.size());
   for (std::size_t b = 0; b < s.bodies.size(); ++b)
-    body_now_[b] = rigid_->state(b);
-  placeBodies(body_now_);
+    work_.body_now[b] = rigid_->state(b);
+  placeBodies(work_.body_now);
   wrench_.assign(s.bodies.size(), Wrench{});
 
   // Fill the blocks on the lattice; drop particles outside the domain, inside a body, or
@@ -192,7 +192,7 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
           const Vec3 x = b.min + sp * Vec3(i + 0.5, j + 0.5, k + 0.5);
           const bool inside_domain = s.domain.contains(x);
           if (!inside_domain || boundaries_->signedDistance(x) < (1.0 - 1e-6) * rf) {
-            ++removed_at_start_;
+            ++run_.removed_at_start;
             ++next_id;
             continue;
           }
@@ -215,7 +215,7 @@ std::size_t Simulation::countPenetrating() const {
 void Simulation::removeOutsideDomain() {
   FluidState& st = fluid_->state();
   const std::size_t n = st.size();
-  flags_.assign(n, 0);
+  work_.flags.assign(n, 0);
   std::size_t out = 0;
   bool non_finite = false;
   for (std::size_t i = 0; i < n; ++i) {
@@ -225,14 +225,14 @@ void Simulation::removeOutsideDomain() {
       continue;
     }
     const bool outside = !model_.domain.contains(st.position[i]);
-    flags_[i] = outside;
+    work_.flags[i] = outside;
     out += outside;
   }
   if (non_finite)
     fail(checkFluidHealth(st, model_.fluid.rest_density, model_.health.max_density_ratio));
   if (out == 0) return;
-  st.removeIf(flags_);
-  lost_ += out;
+  st.removeIf(work_.flags);
+  run_.lost += out;
 }
 
 void Simulation::fail(const FluidHealth& health) {
@@ -241,8 +241,8 @@ void Simulation::fail(const FluidHealth& health) {
   const std::size_t i = health.slot;
   const Vec3 x = st.position[i];
   std::ostringstream m;
-  m << "step " << steps_ << " (t = " << time_ << " s): fluid particle " << st.id[i] << " at ("
-    << x.x() << ", " << x.y() << ", " << x.z() << ") m has "
+  m << "step " << run_.steps << " (t = " << run_.time << " s): fluid particle " << st.id[i]
+    << " at (" << x.x() << ", " << x.y() << ", " << x.z() << ") m has "
     << describeProblem(health, st, f.rest_density);
   if (health.problem == FluidHealth::Problem::DensityRatio) {
     m << ", above health.max_density_ratio = " << model_.health.max_density_ratio
@@ -256,7 +256,7 @@ void Simulation::fail(const FluidHealth& health) {
       << ") or time.max_dt (now " << model_.max_dt << " s), or raise fluid.speed_of_sound (now "
       << f.speed_of_sound << " m/s)";
   }
-  failure_.emplace(m.str(), steps_, time_, st.id[i], x);
+  failure_.emplace(m.str(), run_.steps, run_.time, st.id[i], x);
   throw *failure_;
 }
 
@@ -276,7 +276,7 @@ double Simulation::chooseDt(double t_limit) const {
   }
   const double dt = stableTimeStep(model_.fluid, model_.cfl, model_.max_dt, v_max,
                                    fluid_->maxAcceleration(), nu_max_);
-  const double remaining = t_limit - time_;
+  const double remaining = t_limit - run_.time;
   // Land exactly on t_limit, and never leave a sliver step behind.
   if (remaining <= dt) return remaining;
   if (remaining < 1.5 * dt) return 0.5 * remaining;
@@ -285,7 +285,7 @@ double Simulation::chooseDt(double t_limit) const {
 
 double Simulation::step(double t_limit) {
   if (failure_) throw *failure_;
-  if (!(t_limit > time_)) return 0.0;
+  if (!(t_limit > run_.time)) return 0.0;
   FluidState& st = fluid_->state();
 
   auto t0 = Clock::now();
@@ -298,7 +298,7 @@ double Simulation::step(double t_limit) {
   timings_.density += secondsSince(t0);
   t0 = Clock::now();
   // The walls' density share and viscous shear (their part of the fluid's sums).
-  boundaries_->addWallTerms(*fluid_, st.density, wall_shear_, wall_reaction_);
+  boundaries_->addWallTerms(*fluid_, st.density, work_.wall_shear, work_.wall_reaction);
   timings_.boundary += secondsSince(t0);
   t0 = Clock::now();
   fluid_->computePressure();
@@ -306,16 +306,17 @@ double Simulation::step(double t_limit) {
   t0 = Clock::now();
   // The walls' pressure force: the samples at the fluid's pressure there.
   boundaries_->computeSamplePressure(*fluid_, model_.gravity);
-  boundaries_->addWallPressure(*fluid_, wall_shear_, wall_reaction_);
+  boundaries_->addWallPressure(*fluid_, work_.wall_shear, work_.wall_reaction);
   timings_.boundary += secondsSince(t0);
 
   t0 = Clock::now();
-  fluid_->computeAccelerations(model_.gravity, wall_shear_);
+  fluid_->computeAccelerations(model_.gravity, work_.wall_shear);
   timings_.forces += secondsSince(t0);
   if (penalty_) {
     // Baseline: boundary forces join the fluid's forces; no control, no correction.
     t0 = Clock::now();
-    last_contacts_ = penalty_->apply(*boundaries_, st.position, st.acceleration, flags_, wrench_);
+    run_.last_contacts =
+        penalty_->apply(*boundaries_, st.position, st.acceleration, work_.flags, wrench_);
     const double t_penalty = secondsSince(t0);
     timings_.control += t_penalty;
     timings_.boundary += t_penalty;
@@ -323,7 +324,7 @@ double Simulation::step(double t_limit) {
 
   if (fluid_forces_) {
     t0 = Clock::now();
-    fluid_forces_(st, st.acceleration, time_);
+    fluid_forces_(st, st.acceleration, run_.time);
     if (st.acceleration.size() != st.size())
       throw std::logic_error("FluidForces changed the size of the acceleration array");
     timings_.forces += secondsSince(t0);
@@ -332,28 +333,28 @@ double Simulation::step(double t_limit) {
   // Predict: v* = v + dt a, x* = x + dt v* (all forces but direct forcing's).
   t0 = Clock::now();
   const double dt = chooseDt(t_limit);
-  fluid_->predict(dt, x_pred_, v_old_);
+  fluid_->predict(dt, work_.x_pred, work_.v_old);
   timings_.integration += secondsSince(t0);
 
   // Bodies predicted over dt without fluid forces; contacts and velocity control there.
   t0 = Clock::now();
   const std::size_t nb = boundaries_->bodyCount();
   for (std::size_t b = 0; b < nb; ++b)
-    body_now_[b] = rigid_->state(b);
-  rigid_->predict(dt, body_pred_);
+    work_.body_now[b] = rigid_->state(b);
+  rigid_->predict(dt, work_.body_pred);
   timings_.rigid += secondsSince(t0);
 
   ControlResult control;
   if (!penalty_) {
     t0 = Clock::now();
-    std::vector<RigidState>& pred_states = body_final_;  // scratch reuse
+    std::vector<RigidState>& pred_states = work_.body_final;  // scratch reuse
     pred_states.resize(nb);
     for (std::size_t b = 0; b < nb; ++b)
-      pred_states[b] = body_pred_[b].state;
+      pred_states[b] = work_.body_pred[b].state;
     placeBodies(pred_states);
-    control = forcing_.control(*boundaries_, model_.method, dt, x_pred_, v_old_, body_now_,
-                               body_pred_, st.velocity, flags_, wrench_);
-    last_contacts_ = control.contacts;
+    control = forcing_.control(*boundaries_, model_.method, dt, work_.x_pred, work_.v_old,
+                               work_.body_now, work_.body_pred, st.velocity, work_.flags, wrench_);
+    run_.last_contacts = control.contacts;
     const double t_control = secondsSince(t0);
     timings_.control += t_control;
     timings_.boundary += t_control;
@@ -362,14 +363,14 @@ double Simulation::step(double t_limit) {
   // The bodies take exactly one step with the fluid's wrench: control (or penalty) plus
   // the walls' viscous shear.
   for (std::size_t b = 0; b < nb; ++b) {
-    wrench_[b].force += wall_reaction_[b].force;
-    wrench_[b].torque += wall_reaction_[b].torque;
+    wrench_[b].force += work_.wall_reaction[b].force;
+    wrench_[b].torque += work_.wall_reaction[b].torque;
   }
   t0 = Clock::now();
   if (nb > 0) rigid_->step(dt, wrench_);
-  body_final_.resize(nb);
+  work_.body_final.resize(nb);
   for (std::size_t b = 0; b < nb; ++b)
-    body_final_[b] = rigid_->state(b);
+    work_.body_final[b] = rigid_->state(b);
   timings_.rigid += secondsSince(t0);
 
   t0 = Clock::now();
@@ -378,16 +379,16 @@ double Simulation::step(double t_limit) {
 
   // Position correction against the bodies' final poses.
   t0 = Clock::now();
-  placeBodies(body_final_);
+  placeBodies(work_.body_final);
   if (!penalty_ && (control.particles > 0 || boundaries_->hasMovingBodies()))
-    correctPositions(*boundaries_, st.position, flags_);
+    correctPositions(*boundaries_, st.position, work_.flags);
   const double t_correction = secondsSince(t0);
   timings_.correction += t_correction;
   timings_.boundary += t_correction;
 
-  time_ = (t_limit - time_ == dt) ? t_limit : time_ + dt;
-  last_dt_ = dt;
-  ++steps_;
+  run_.time = (t_limit - run_.time == dt) ? t_limit : run_.time + dt;
+  run_.last_dt = dt;
+  ++run_.steps;
 
   // Health: finite positions and velocities, the density ratio's limit; penetration
   // against the exact shapes.
@@ -396,30 +397,21 @@ double Simulation::step(double t_limit) {
   if (!health.ok()) fail(health);
   const double ratio = health.max_density_ratio;
   const std::size_t penetrating = countPenetrating();
-  max_density_ratio_ = std::max(max_density_ratio_, ratio);
-  max_penetrating_ = std::max(max_penetrating_, penetrating);
-  window_density_ratio_ = std::max(window_density_ratio_, ratio);
-  window_penetrating_ = std::max(window_penetrating_, penetrating);
+  run_.max_density_ratio = std::max(run_.max_density_ratio, ratio);
+  run_.max_penetrating = std::max(run_.max_penetrating, penetrating);
+  run_.window_density_ratio = std::max(run_.window_density_ratio, ratio);
+  run_.window_penetrating = std::max(run_.window_penetrating, penetrating);
   return dt;
 }
 
 void Simulation::advanceTo(double t) {
-  while (time_ < t)
+  while (run_.time < t)
     step(t);
 }
 
 SimulationState Simulation::saveState() const {
   SimulationState s;
-  s.time = time_;
-  s.steps = steps_;
-  s.last_dt = last_dt_;
-  s.removed_at_start = removed_at_start_;
-  s.lost = lost_;
-  s.max_penetrating = max_penetrating_;
-  s.window_penetrating = window_penetrating_;
-  s.last_contacts = last_contacts_;
-  s.max_density_ratio = max_density_ratio_;
-  s.window_density_ratio = window_density_ratio_;
+  s.run = run_;
   s.fluid = fluid_->state();
   s.wrenches = wrench_;
   s.rigid = rigid_->saveState();
@@ -436,25 +428,17 @@ void Simulation::restoreState(const SimulationState& s) {
   require(s.wrenches.size() == wrench_.size(), "state.wrenches",
           "has " + std::to_string(s.wrenches.size()) + " bodies, the simulation " +
               std::to_string(wrench_.size()));
-  require(std::isfinite(s.time) && s.time >= 0, "state.time", "must be finite and >= 0");
+  require(std::isfinite(s.run.time) && s.run.time >= 0, "state.run.time",
+          "must be finite and >= 0");
   rigid_->loadState(s.rigid);
   fluid_->state() = f;
-  time_ = s.time;
-  steps_ = s.steps;
-  last_dt_ = s.last_dt;
-  removed_at_start_ = s.removed_at_start;
-  lost_ = s.lost;
-  max_penetrating_ = s.max_penetrating;
-  window_penetrating_ = s.window_penetrating;
-  last_contacts_ = s.last_contacts;
-  max_density_ratio_ = s.max_density_ratio;
-  window_density_ratio_ = s.window_density_ratio;
+  run_ = s.run;
   wrench_ = s.wrenches;
   failure_.reset();
   // The boundaries see the bodies where the rigid-body side now has them.
-  for (std::size_t b = 0; b < body_now_.size(); ++b)
-    body_now_[b] = rigid_->state(b);
-  placeBodies(body_now_);
+  for (std::size_t b = 0; b < work_.body_now.size(); ++b)
+    work_.body_now[b] = rigid_->state(b);
+  placeBodies(work_.body_now);
 }
 
 void Simulation::snapshot(FluidSnapshot& out) const {

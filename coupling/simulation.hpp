@@ -106,13 +106,26 @@ struct BodyState {
 /// Simulation built again from the same settings, restoreState() continues the run bit
 /// for bit. The fluid's arrays are in the simulation's current slot order (not id order):
 /// the order decides the order of sums, so it is part of the state.
+/// The run's counters and maxima: what changes besides the particles and the bodies.
+struct RunCounters {
+  double time = 0;                     ///< s
+  std::uint64_t steps = 0;             ///< steps taken
+  double last_dt = 0;                  ///< s
+  std::uint64_t removed_at_start = 0;  ///< fluid particles not placed (inside a body, ...)
+  std::uint64_t lost = 0;              ///< fluid particles that left the domain
+  std::uint64_t max_penetrating = 0;   ///< most fluid centres inside a body after a step
+  std::uint64_t window_penetrating = 0;
+  std::uint64_t last_contacts = 0;  ///< particle-body contacts in the last step
+  double max_density_ratio = 0;     ///< largest density / rest density after a step
+  double window_density_ratio = 0;  ///< the same since the last resetWindow()
+};
+
+/// Everything of a run that changes from step to step (what a checkpoint holds): with a
+/// Simulation built again from the same settings, restoreState() continues the run bit
+/// for bit. The fluid's arrays are in the simulation's current slot order (not id order):
+/// the order decides the order of sums, so it is part of the state.
 struct SimulationState {
-  double time = 0;          ///< s
-  std::uint64_t steps = 0;  ///< steps taken
-  double last_dt = 0;       ///< s
-  std::uint64_t removed_at_start = 0, lost = 0, max_penetrating = 0, window_penetrating = 0;
-  std::uint64_t last_contacts = 0;
-  double max_density_ratio = 0, window_density_ratio = 0;
+  RunCounters run;
   FluidState fluid;              ///< every per-particle array
   std::vector<Wrench> wrenches;  ///< (bodies) the fluid's wrench in the last step
   std::vector<double> rigid;     ///< RigidBodies::saveState()
@@ -161,8 +174,8 @@ class Simulation {
   /// Their accelerations count in the time step's limits like the fluid's own.
   void setFluidForces(FluidForces forces) { fluid_forces_ = std::move(forces); }
 
-  double time() const { return time_; }
-  std::uint64_t steps() const { return steps_; }
+  double time() const { return run_.time; }
+  std::uint64_t steps() const { return run_.steps; }
   /// The settings as given (speed_of_sound 0 = "auto", an empty domain, ...).
   const SimulationSettings& settings() const { return settings_; }
   /// The run's constant model: the settings with every automatic value resolved (speed of
@@ -175,31 +188,31 @@ class Simulation {
   /// The fluid's wrench on each body in the last step (zero for one-way bodies).
   const std::vector<Wrench>& lastWrenches() const { return wrench_; }
   /// Particle-body contacts found in the last step.
-  std::size_t lastContacts() const { return last_contacts_; }
+  std::size_t lastContacts() const { return run_.last_contacts; }
   /// (n) 1 where a fluid particle (in the current order) was in contact in the last step
   /// (with the penalty method: a sample within the penalty reach).
-  const std::vector<std::uint8_t>& lastInContact() const { return flags_; }
+  const std::vector<std::uint8_t>& lastInContact() const { return work_.flags; }
 
   std::size_t fluidParticles() const { return fluid_->state().size(); }
   std::size_t boundaryParticles() const;
-  std::size_t removedAtStart() const { return removed_at_start_; }
+  std::size_t removedAtStart() const { return run_.removed_at_start; }
   /// Fluid particles removed because they left the domain (never for a non-finite value:
   /// that stops the run with a HealthError).
-  std::size_t lostParticles() const { return lost_; }
+  std::size_t lostParticles() const { return run_.lost; }
   /// Most fluid particle centres strictly inside a body's exact shape after any step.
-  std::size_t maxPenetrating() const { return max_penetrating_; }
+  std::size_t maxPenetrating() const { return run_.max_penetrating; }
   /// Fluid centres strictly inside a body's exact shape now.
   std::size_t countPenetrating() const;
   /// Largest density / rest density seen after any step.
-  double maxDensityRatio() const { return max_density_ratio_; }
+  double maxDensityRatio() const { return run_.max_density_ratio; }
   /// The same two maxima over the steps since the last resetWindow() (e.g. one frame).
-  double windowMaxDensityRatio() const { return window_density_ratio_; }
-  std::size_t windowMaxPenetrating() const { return window_penetrating_; }
+  double windowMaxDensityRatio() const { return run_.window_density_ratio; }
+  std::size_t windowMaxPenetrating() const { return run_.window_penetrating; }
   void resetWindow() {
-    window_density_ratio_ = 0;
-    window_penetrating_ = 0;
+    run_.window_density_ratio = 0;
+    run_.window_penetrating = 0;
   }
-  double lastDt() const { return last_dt_; }
+  double lastDt() const { return run_.last_dt; }
 
   /// The run's changing state (checkpoints). Throws std::logic_error when the rigid-body
   /// integrator cannot be saved.
@@ -227,24 +240,20 @@ class Simulation {
   std::unique_ptr<RigidBodies> rigid_;
   DirectForcing forcing_;
   std::unique_ptr<PenaltyBoundary> penalty_;  // method Penalty only
-  double time_ = 0;
-  std::uint64_t steps_ = 0;
-  double last_dt_ = 0;
-  double nu_max_ = 0;  // m^2/s, largest kinematic viscosity of the fluid (set at start)
-  std::size_t removed_at_start_ = 0, lost_ = 0, max_penetrating_ = 0;
-  double max_density_ratio_ = 0;
-  double window_density_ratio_ = 0;
-  std::size_t window_penetrating_ = 0;
+  double nu_max_ = 0;           // m^2/s, largest kinematic viscosity of the fluid (set at start)
+  RunCounters run_;             // with the fluid's state and the rigid bodies': what changes
+  std::vector<Wrench> wrench_;  // (bodies) the fluid's wrench in the last step
   StepTimings timings_;
-  std::vector<Vec3> x_pred_;                       // scratch: predicted positions x* of the step
-  std::vector<Vec3> v_old_;                        // scratch: velocities at the start of the step
-  std::vector<std::uint8_t> flags_;                // scratch
-  std::vector<RigidState> body_now_, body_final_;  // scratch: body states at t and t + dt
-  std::vector<RigidPrediction> body_pred_;         // scratch: predicted body states
-  std::vector<Wrench> wrench_;
-  std::vector<Vec3> wall_shear_;       // scratch: (n) the walls' viscous shear, m/s^2
-  std::vector<Wrench> wall_reaction_;  // scratch: (bodies) its reaction on two-way bodies
-  std::size_t last_contacts_ = 0;
+  /// Scratch space of the step, reused every step (no state: nothing in it outlives one).
+  struct Workspace {
+    std::vector<Vec3> x_pred;                      // (n) predicted positions x*
+    std::vector<Vec3> v_old;                       // (n) velocities at the step's start
+    std::vector<std::uint8_t> flags;               // (n) in contact / to remove
+    std::vector<RigidState> body_now, body_final;  // (bodies) states at t and t + dt
+    std::vector<RigidPrediction> body_pred;        // (bodies) predicted states
+    std::vector<Vec3> wall_shear;                  // (n) the walls' viscous shear, m/s^2
+    std::vector<Wrench> wall_reaction;             // (bodies) its reaction on two-way bodies
+  } work_;
   std::optional<HealthError> failure_;  // the error that stopped the run
   FluidForces fluid_forces_;            // the user's, or empty
 };

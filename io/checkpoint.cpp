@@ -51,16 +51,17 @@ void writeCheckpoint(const std::string& path, const SimulationState& s,
 
     const Handle g = w.createGroup(root, "state");
     const hid_t group = g.get();
-    w.writeAttribute(group, "time", s.time);
-    w.writeAttribute(group, "last_dt", s.last_dt);
-    w.writeAttribute(group, "max_density_ratio", s.max_density_ratio);
-    w.writeAttribute(group, "window_density_ratio", s.window_density_ratio);
-    w.writeAttribute(group, "steps", s.steps);
-    w.writeAttribute(group, "removed_at_start", s.removed_at_start);
-    w.writeAttribute(group, "lost", s.lost);
-    w.writeAttribute(group, "max_penetrating", s.max_penetrating);
-    w.writeAttribute(group, "window_penetrating", s.window_penetrating);
-    w.writeAttribute(group, "last_contacts", s.last_contacts);
+    const RunCounters& run = s.run;
+    w.writeAttribute(group, "time", run.time);
+    w.writeAttribute(group, "last_dt", run.last_dt);
+    w.writeAttribute(group, "max_density_ratio", run.max_density_ratio);
+    w.writeAttribute(group, "window_density_ratio", run.window_density_ratio);
+    w.writeAttribute(group, "steps", run.steps);
+    w.writeAttribute(group, "removed_at_start", run.removed_at_start);
+    w.writeAttribute(group, "lost", run.lost);
+    w.writeAttribute(group, "max_penetrating", run.max_penetrating);
+    w.writeAttribute(group, "window_penetrating", run.window_penetrating);
+    w.writeAttribute(group, "last_contacts", run.last_contacts);
     const FluidState& f = s.fluid;
     const hsize_t n = f.size();
     w.writeDataset(group, "position", H5T_NATIVE_DOUBLE, f.position.data(), n, 3);
@@ -110,16 +111,17 @@ SimulationState readCheckpoint(const std::string& path, CheckpointInfo* info) {
   auto f64 = [&](const char* name) {
     return r.readAttribute<double>(group, name, H5T_NATIVE_DOUBLE);
   };
-  s.time = f64("time");
-  s.last_dt = f64("last_dt");
-  s.max_density_ratio = f64("max_density_ratio");
-  s.window_density_ratio = f64("window_density_ratio");
-  s.steps = u64("steps");
-  s.removed_at_start = u64("removed_at_start");
-  s.lost = u64("lost");
-  s.max_penetrating = u64("max_penetrating");
-  s.window_penetrating = u64("window_penetrating");
-  s.last_contacts = u64("last_contacts");
+  RunCounters& run = s.run;
+  run.time = f64("time");
+  run.last_dt = f64("last_dt");
+  run.max_density_ratio = f64("max_density_ratio");
+  run.window_density_ratio = f64("window_density_ratio");
+  run.steps = u64("steps");
+  run.removed_at_start = u64("removed_at_start");
+  run.lost = u64("lost");
+  run.max_penetrating = u64("max_penetrating");
+  run.window_penetrating = u64("window_penetrating");
+  run.last_contacts = u64("last_contacts");
   auto vec3s = [&](const char* name) {
     const std::vector<double> flat = r.readDataset<double>(group, name, H5T_NATIVE_DOUBLE, 3);
     std::vector<Vec3> out(flat.size() / 3);
