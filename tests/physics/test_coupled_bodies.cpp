@@ -162,7 +162,7 @@ TEST_P(Buoyancy, FloatsFlatAtTheArchimedesDraft) {
   EXPECT_NEAR(f.draft, ratio * 0.10, 0.03 * ratio * 0.10);
   EXPECT_LT(f.tilt, 0.1);
   EXPECT_EQ(f.max_penetrating, 0u);
-  if (ratio != 0.5) return;  // CI time: one ratio started at its draft, both methods
+  if (ratio != 0.5) return;  // one ratio also started at its draft
   // Started at rest at its draft in undisturbed fluid, the box floats where the dropped
   // one does: the fluid under it carries it by its pressure, not as a stacked lattice.
   // It starts where it ends, so 1 s is enough (local, ratio 0.5: its mean draft over
