@@ -79,6 +79,58 @@ struct FrameWriter::Impl : hdf5::Writer {
   std::vector<FrameEntry> entries;
   bool finished = false;
 
+  /// Creates `file_path` with the root attributes, the groups and the bodies' empty series
+  /// and surfaces: computed from `sim`, or (resuming, old >= 0) copied from the file `old`.
+  void createFile(const std::string& file_path, const SceneFile& scene, const Simulation& sim,
+                  hid_t old) {
+    path = file_path;
+    file = create(H5Fcreate(file_path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose,
+                  "create the file");
+    const hid_t root = file.get();
+    const FluidParams& fluid = sim.fluid().params();
+    writeAttribute(root, "scene", scene.name);
+    writeAttribute(root, "wake_version", std::string(wakeVersion()));
+    writeAttribute(root, "particle_radius", fluid.particle_radius);     // m
+    writeAttribute(root, "rest_density", fluid.rest_density);           // kg/m^3
+    writeAttribute(root, "speed_of_sound", fluid.speed_of_sound);       // m/s (resolved)
+    writeAttribute(root, "smoothing_ratio", fluid.smoothing_ratio);     // H / spacing
+    writeAttribute(root, "frame_rate", scene.frame_rate);               // 1/s
+    writeAttribute(root, "gravity", sim.settings().gravity.data(), 3);  // m/s^2
+
+    frames_group = createGroup(root, "frames");
+    bodies_group = createGroup(root, "bodies");
+    for (const BodyState& body : sim.bodyStates()) {
+      BodySeries s;
+      s.group = createGroup(bodies_group.get(), body.name);
+      s.time = createSeries(s.group.get(), "time", 1);
+      s.position = createSeries(s.group.get(), "position", 3);
+      s.orientation = createSeries(s.group.get(), "orientation", 4);
+      s.linear_velocity = createSeries(s.group.get(), "linear_velocity", 3);
+      s.angular_velocity = createSeries(s.group.get(), "angular_velocity", 3);
+      bodies.push_back(std::move(s));
+    }
+    if (old < 0) {
+      writeSurfaces(sim);
+    } else {
+      const Boundaries& boundaries = sim.boundaries();
+      for (std::size_t b = 0; b < boundaries.bodyCount() && b < bodies.size(); ++b) {
+        for (const char* set : {"surface_points", "surface_normals"}) {
+          const std::string name = "bodies/" + boundaries.body(b).name + "/" + set;
+          check(H5Ocopy(old, name.c_str(), root, name.c_str(), H5P_DEFAULT, H5P_DEFAULT),
+                "copy " + name);
+        }
+        writeAttribute(bodies[b].group.get(), "kind", kindName(boundaries.body(b).kind));
+      }
+    }
+    check(H5Fflush(root, H5F_SCOPE_GLOBAL), "flush the file");
+  }
+
+  static std::string kindName(BodyKind kind) {
+    return kind == BodyKind::Static      ? "static"
+           : kind == BodyKind::Kinematic ? "kinematic"
+                                         : "dynamic";
+  }
+
   /// Each body's boundary samples in its body frame (surface_points, surface_normals) and
   /// its kind, from the samples at the current pose. Groups in the order of sim.bodyStates().
   void writeSurfaces(const Simulation& sim) const {
@@ -104,11 +156,7 @@ struct FrameWriter::Impl : hdf5::Writer {
       const hsize_t m = points[b].size();
       writeDataset(group, "surface_points", H5T_NATIVE_DOUBLE, points[b].data(), m, 3);
       writeDataset(group, "surface_normals", H5T_NATIVE_DOUBLE, normals[b].data(), m, 3);
-      const BodyKind kind = boundaries.body(b).kind;
-      writeAttribute(group, "kind",
-                     std::string(kind == BodyKind::Static      ? "static"
-                                 : kind == BodyKind::Kinematic ? "kinematic"
-                                                               : "dynamic"));
+      writeAttribute(group, "kind", kindName(boundaries.body(b).kind));
     }
   }
 
@@ -167,33 +215,7 @@ FrameWriter::FrameWriter(const std::string& out_dir, const SceneFile& scene, con
   d.xdmf_final = stem + ".xdmf";
   d.xdmf_partial = d.xdmf_final + ".partial";
 
-  d.file = d.create(H5Fcreate(d.h5_partial.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT),
-                    H5Fclose, "create the file");
-  const hid_t root = d.file.get();
-  const FluidParams& fluid = sim.fluid().params();
-  d.writeAttribute(root, "scene", scene.name);
-  d.writeAttribute(root, "wake_version", std::string(wakeVersion()));
-  d.writeAttribute(root, "particle_radius", fluid.particle_radius);     // m
-  d.writeAttribute(root, "rest_density", fluid.rest_density);           // kg/m^3
-  d.writeAttribute(root, "speed_of_sound", fluid.speed_of_sound);       // m/s (resolved)
-  d.writeAttribute(root, "smoothing_ratio", fluid.smoothing_ratio);     // H / spacing
-  d.writeAttribute(root, "frame_rate", scene.frame_rate);               // 1/s
-  d.writeAttribute(root, "gravity", sim.settings().gravity.data(), 3);  // m/s^2
-
-  d.frames_group = d.createGroup(root, "frames");
-  d.bodies_group = d.createGroup(root, "bodies");
-  for (const BodyState& body : sim.bodyStates()) {
-    BodySeries s;
-    s.group = d.createGroup(d.bodies_group.get(), body.name);
-    s.time = d.createSeries(s.group.get(), "time", 1);
-    s.position = d.createSeries(s.group.get(), "position", 3);
-    s.orientation = d.createSeries(s.group.get(), "orientation", 4);
-    s.linear_velocity = d.createSeries(s.group.get(), "linear_velocity", 3);
-    s.angular_velocity = d.createSeries(s.group.get(), "angular_velocity", 3);
-    d.bodies.push_back(std::move(s));
-  }
-  d.writeSurfaces(sim);
-  d.check(H5Fflush(root, H5F_SCOPE_GLOBAL), "flush the file");
+  d.createFile(d.h5_partial, scene, sim, -1);
 }
 
 FrameWriter::FrameWriter(const std::string& out_dir, const SceneFile& scene, const Simulation& sim,
@@ -206,52 +228,55 @@ FrameWriter::FrameWriter(const std::string& out_dir, const SceneFile& scene, con
   d.h5_partial = d.h5_final + ".partial";
   d.xdmf_final = stem + ".xdmf";
   d.xdmf_partial = d.xdmf_final + ".partial";
-  d.path = d.h5_partial;
-  if (::access(d.h5_partial.c_str(), R_OK | W_OK) != 0)
-    throw std::runtime_error("cannot resume: " + d.h5_partial + " is missing or not writable");
-  d.file =
-      d.create(H5Fopen(d.h5_partial.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), H5Fclose, "open the file");
-  d.frames_group = d.openGroup(d.file.get(), "frames");
-  d.bodies_group = d.openGroup(d.file.get(), "bodies");
-
-  // Frames 0 .. frames-1 stay; later ones (written after the checkpoint) go.
-  H5G_info_t info;
-  d.check(H5Gget_info(d.frames_group.get(), &info), "count the frames");
+  // A run killed while it wrote a frame can leave that frame's HDF5 metadata half on disk
+  // (HDF5 has no journal): the file is never written again in place. A new file takes the
+  // first `frames` frames and body series rows of the old one (written and synced before
+  // the checkpoint), and replaces it.
+  if (::access(d.h5_partial.c_str(), R_OK) != 0)
+    throw std::runtime_error("cannot resume: " + d.h5_partial + " is missing");
+  hdf5::Writer old_file;
+  old_file.path = d.h5_partial;
+  const Handle old = old_file.create(H5Fopen(d.h5_partial.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT),
+                                     H5Fclose, "open the file");
+  const std::string fresh = d.h5_partial + ".resume";
+  d.createFile(fresh, scene, sim, old.get());
+  const Handle old_frames = old_file.openGroup(old.get(), "frames");
   for (std::size_t k = 0; k < frames; ++k) {
     const std::string name = frameName(k);
-    if (H5Lexists(d.frames_group.get(), name.c_str(), H5P_DEFAULT) <= 0)
-      throw std::runtime_error("cannot resume: " + d.h5_partial + " holds " +
-                               std::to_string(info.nlinks) + " frames, the checkpoint " +
-                               std::to_string(frames));
+    if (H5Lexists(old_frames.get(), name.c_str(), H5P_DEFAULT) <= 0)
+      throw std::runtime_error("cannot resume: " + d.h5_partial + " lacks frame " + name +
+                               " of the " + std::to_string(frames) + " the checkpoint counts");
+    old_file.check(H5Ocopy(old_frames.get(), name.c_str(), d.frames_group.get(), name.c_str(),
+                           H5P_DEFAULT, H5P_DEFAULT),
+                   "copy frame " + name);
     const Handle group = d.openGroup(d.frames_group.get(), name);
     const double time = d.readAttribute<double>(group.get(), "time", H5T_NATIVE_DOUBLE);
     const std::vector<std::uint32_t> id =
         d.readDataset<std::uint32_t>(group.get(), "id", H5T_NATIVE_UINT32, 1);
     d.entries.push_back(FrameEntry{k, time, id.size()});
   }
-  for (std::size_t k = frames; k < frames + info.nlinks; ++k) {
-    const std::string name = frameName(k);
-    if (H5Lexists(d.frames_group.get(), name.c_str(), H5P_DEFAULT) > 0)
-      d.check(H5Ldelete(d.frames_group.get(), name.c_str(), H5P_DEFAULT), "remove " + name);
-  }
-  for (const BodyState& body : sim.bodyStates()) {
-    BodySeries s;
-    s.group = d.openGroup(d.bodies_group.get(), body.name);
-    auto open = [&](const char* name, hsize_t cols) {
-      Handle set = d.create(H5Dopen2(s.group.get(), name, H5P_DEFAULT), H5Dclose,
-                            std::string("open dataset ") + name);
-      const hsize_t dims[2] = {frames, cols};
-      d.check(H5Dset_extent(set.get(), dims), "shorten a body series");
-      return set;
+  const std::vector<BodyState> states = sim.bodyStates();
+  for (std::size_t b = 0; b < states.size(); ++b) {
+    const Handle group = old_file.openGroup(old.get(), "bodies/" + states[b].name);
+    const BodySeries& s = d.bodies[b];
+    auto copyRows = [&](const char* name, const Handle& to, hsize_t cols) {
+      const std::vector<double> rows =
+          old_file.readDataset<double>(group.get(), name, H5T_NATIVE_DOUBLE, cols);
+      if (rows.size() < frames * cols)
+        throw std::runtime_error("cannot resume: " + d.h5_partial + " has fewer rows of " +
+                                 states[b].name + "/" + name + " than frames");
+      for (std::size_t k = 0; k < frames; ++k)
+        d.appendRow(to, k, rows.data() + k * cols, cols);
     };
-    s.time = open("time", 1);
-    s.position = open("position", 3);
-    s.orientation = open("orientation", 4);
-    s.linear_velocity = open("linear_velocity", 3);
-    s.angular_velocity = open("angular_velocity", 3);
-    d.bodies.push_back(std::move(s));
+    copyRows("time", s.time, 1);
+    copyRows("position", s.position, 3);
+    copyRows("orientation", s.orientation, 4);
+    copyRows("linear_velocity", s.linear_velocity, 3);
+    copyRows("angular_velocity", s.angular_velocity, 3);
   }
   d.check(H5Fflush(d.file.get(), H5F_SCOPE_GLOBAL), "flush the file");
+  renameFile(fresh, d.h5_partial);  // the open file keeps its data under the new name
+  d.path = d.h5_partial;
   writeFileAtomically(d.xdmf_partial, d.xdmf(fileName(d.h5_partial)));
 }
 

@@ -37,10 +37,11 @@ class FrameWriter {
   /// Creates DIR/<scene.name>.h5.partial (DIR must exist) and writes the root attributes.
   /// Throws std::runtime_error naming the file when it cannot be written.
   FrameWriter(const std::string& out_dir, const SceneFile& scene, const Simulation& sim);
-  /// Continues the output of a stopped run: opens DIR/<scene.name>.h5.partial, keeps its
-  /// first `frames` frames (and body series rows), removes any later ones (written after
-  /// the checkpoint the run resumes from) and rewrites the XDMF index. Throws
-  /// std::runtime_error naming the file when it is missing or holds fewer frames.
+  /// Continues the output of a stopped run: copies the first `frames` frames (and body
+  /// series rows, and the bodies' surfaces) of DIR/<scene.name>.h5.partial into a new file
+  /// that replaces it (a run killed while writing a frame may leave that frame's HDF5
+  /// metadata half written: the old file is only read), and rewrites the XDMF index.
+  /// Throws std::runtime_error naming the file when it is missing or holds fewer frames.
   FrameWriter(const std::string& out_dir, const SceneFile& scene, const Simulation& sim,
               std::size_t frames);
   /// Closes the file; without finish() the .partial files stay as they are.
