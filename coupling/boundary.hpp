@@ -66,7 +66,6 @@ class Boundaries {
   RigidState bodyState(std::size_t b) const;
   std::size_t sampleCount() const;
   std::size_t bodySampleCount(std::size_t b) const { return bodies_[b].sample_count; }
-  double sampleRadius() const { return radius_; }
   /// Largest distance of a body's samples from its origin (m): bounds surface speeds.
   double bodyExtent(std::size_t b) const { return bodies_[b].extent; }
 
@@ -149,9 +148,8 @@ class Boundaries {
     double all, walls;
   };
   Clearance clearance(const Vec3& x) const;
-  /// The fluid particles' radius r_f (m).
+  /// The fluid particles' radius r_f (m), also the samples' radius r_b.
   double fluidRadius() const { return radius_; }
-  bool empty() const { return bodies_.empty(); }
 
   /// Number of fluid centres strictly inside some body's exact shape.
   std::size_t countInside(const std::vector<Vec3>& x) const;

@@ -93,7 +93,7 @@ bool escape(const Boundaries& boundaries, Vec3& x) {
 
 std::size_t correctPositions(const Boundaries& boundaries, std::vector<Vec3>& x,
                              const std::vector<std::uint8_t>& candidates) {
-  if (boundaries.empty()) return 0;
+  if (boundaries.bodyCount() == 0) return 0;
   const std::int64_t n = static_cast<std::int64_t>(x.size());
   const double rf = boundaries.fluidRadius();
   std::size_t stuck = 0;

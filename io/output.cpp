@@ -79,6 +79,16 @@ struct FrameWriter::Impl : hdf5::Writer {
   std::vector<FrameEntry> entries;
   bool finished = false;
 
+  /// The output's file names in `out_dir` for the scene `name` (final and .partial).
+  void setNames(const std::string& out_dir, const std::string& name) {
+    const std::string stem = out_dir + "/" + name;
+    h5_final = stem + ".h5";
+    h5_partial = h5_final + ".partial";
+    path = h5_partial;
+    xdmf_final = stem + ".xdmf";
+    xdmf_partial = xdmf_final + ".partial";
+  }
+
   /// Creates `file_path` with the root attributes, the groups and the bodies' empty series
   /// and surfaces: computed from `sim`, or (resuming, old >= 0) copied from the file `old`.
   void createFile(const std::string& file_path, const SceneFile& scene, const Simulation& sim,
@@ -208,12 +218,7 @@ FrameWriter::FrameWriter(const std::string& out_dir, const SceneFile& scene, con
     : impl_(std::make_unique<Impl>()) {
   const QuietHdf5Errors quiet;
   Impl& d = *impl_;
-  const std::string stem = out_dir + "/" + scene.name;
-  d.h5_final = stem + ".h5";
-  d.h5_partial = d.h5_final + ".partial";
-  d.path = d.h5_partial;
-  d.xdmf_final = stem + ".xdmf";
-  d.xdmf_partial = d.xdmf_final + ".partial";
+  d.setNames(out_dir, scene.name);
 
   d.createFile(d.h5_partial, scene, sim, -1);
 }
@@ -223,11 +228,7 @@ FrameWriter::FrameWriter(const std::string& out_dir, const SceneFile& scene, con
     : impl_(std::make_unique<Impl>()) {
   const QuietHdf5Errors quiet;
   Impl& d = *impl_;
-  const std::string stem = out_dir + "/" + scene.name;
-  d.h5_final = stem + ".h5";
-  d.h5_partial = d.h5_final + ".partial";
-  d.xdmf_final = stem + ".xdmf";
-  d.xdmf_partial = d.xdmf_final + ".partial";
+  d.setNames(out_dir, scene.name);
   // A run killed while it wrote a frame can leave that frame's HDF5 metadata half on disk
   // (HDF5 has no journal): the file is never written again in place. A new file takes the
   // first `frames` frames and body series rows of the old one (written and synced before

@@ -1,6 +1,6 @@
 // Exact shapes and their surface sampling (geometry/shape.hpp).
-#include "geometry/shape.hpp"
 #include "geometry/geometry_test_support.hpp"
+#include "geometry/shape.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // Shapes of the Bullet bridge (geometry/shape.hpp): capsule, rounded cylinder, cone with
 // margin, rounded convex shapes, compounds, volumes, and the quality of their sampling.
-#include "geometry/shape.hpp"
 #include "geometry/geometry_test_support.hpp"
+#include "geometry/shape.hpp"
 
 #include <gtest/gtest.h>
 
