@@ -56,18 +56,56 @@ std::size_t Boundaries::addBody(const BodySettings& settings) {
   b.sample_count = b.local.size();
   for (const Vec3& p : b.local.position)
     b.extent = std::max(b.extent, p.norm() + radius_);
-  b.rotation = settings.pose.orientation.toRotationMatrix();
-  updateWorldBounds(b);
+  b.start = frameAt(b, {settings.pose, settings.linear_velocity, settings.angular_velocity});
   shear_factor_.push_back(wallShearFactor(settings.slip));
   any_shear_ = any_shear_ || settings.slip < 1.0;
   bodies_.push_back(std::move(b));
   return bodies_.size() - 1;
 }
 
-void Boundaries::updateWorldBounds(Body& b) {
-  const Aabb clip = transformBounds(domain_, b.settings.pose, false);
-  b.world_bounds = transformBounds(b.settings.shape->bounds(clip), b.settings.pose, true);
-  b.contact_bounds = grown(b.world_bounds, radius_);
+BodyFrame Boundaries::frameAt(const Body& b, const RigidState& state) const {
+  BodyFrame f;
+  f.pose = state.pose;
+  f.rotation = state.pose.orientation.toRotationMatrix();
+  f.linear_velocity = state.linear_velocity;
+  f.angular_velocity = state.angular_velocity;
+  const Aabb clip = transformBounds(domain_, state.pose, false);
+  f.world_bounds = transformBounds(b.settings.shape->bounds(clip), state.pose, true);
+  f.contact_bounds = grown(f.world_bounds, radius_);
+  if (b.moving >= 0) {
+    const SampleSet& set = moving_[b.moving].samples;
+    f.world_reach = set.position.empty()
+                        ? Aabb()
+                        : transformBounds(set.reach_box, state.pose, /*to_world=*/true);
+  }
+  return f;
+}
+
+void Boundaries::place(const std::vector<RigidState>& states, BodyPlacement& out) const {
+  if (!finalized_) throw std::logic_error("Boundaries::place before finalize()");
+  if (states.size() != bodies_.size())
+    throw std::invalid_argument("Boundaries::place: " + std::to_string(states.size()) +
+                                " states for " + std::to_string(bodies_.size()) + " bodies");
+  out.frames.resize(bodies_.size());
+  out.moving_reach = Aabb();
+  for (std::size_t bi = 0; bi < bodies_.size(); ++bi) {
+    const Body& b = bodies_[bi];
+    if (b.moving < 0) {
+      out.frames[bi] = b.start;
+      continue;
+    }
+    out.frames[bi] = frameAt(b, states[bi]);
+    out.moving_reach.extend(out.frames[bi].world_reach);
+  }
+}
+
+BodyPlacement Boundaries::placeAtStart() const {
+  std::vector<RigidState> states;
+  for (const Body& b : bodies_)
+    states.push_back({b.settings.pose, b.settings.linear_velocity, b.settings.angular_velocity});
+  BodyPlacement at;
+  place(states, at);
+  return at;
 }
 
 void Boundaries::buildSet(SampleSet& set, const Aabb& box, const std::vector<Vec3>& pos,
@@ -196,34 +234,9 @@ void Boundaries::finalize() {
     b.local.clear();
     b.moving = static_cast<std::int32_t>(moving_.size());
     moving_.push_back(std::move(m));
+    b.start =
+        frameAt(b, {b.settings.pose, b.settings.linear_velocity, b.settings.angular_velocity});
   }
-  for (std::size_t bi = 0; bi < bodies_.size(); ++bi) {
-    const Body& b = bodies_[bi];
-    if (b.moving >= 0)
-      setBodyState(bi, {b.settings.pose, b.settings.linear_velocity, b.settings.angular_velocity});
-  }
-}
-
-void Boundaries::setBodyState(std::size_t body, const RigidState& state) {
-  Body& b = bodies_[body];
-  if (b.moving < 0) throw std::logic_error("body '" + b.settings.name + "' is static");
-  b.settings.pose = state.pose;
-  b.settings.linear_velocity = state.linear_velocity;
-  b.settings.angular_velocity = state.angular_velocity;
-  b.rotation = state.pose.orientation.toRotationMatrix();
-  updateWorldBounds(b);
-  MovingBody& m = moving_[b.moving];
-  m.world_reach = m.samples.position.empty()
-                      ? Aabb()
-                      : transformBounds(m.samples.reach_box, state.pose, /*to_world=*/true);
-  moving_reach_ = Aabb();
-  for (const MovingBody& other : moving_)
-    moving_reach_.extend(other.world_reach);
-}
-
-RigidState Boundaries::bodyState(std::size_t b) const {
-  const BodySettings& s = bodies_[b].settings;
-  return {s.pose, s.linear_velocity, s.angular_velocity};
 }
 
 std::size_t Boundaries::sampleCount() const {
@@ -233,14 +246,15 @@ std::size_t Boundaries::sampleCount() const {
   return total;
 }
 
-void Boundaries::worldSamples(std::vector<Vec3>& position, std::vector<Vec3>& normal,
-                              std::vector<double>& volume, std::vector<std::uint32_t>& body) const {
+void Boundaries::worldSamples(const BodyPlacement& at, std::vector<Vec3>& position,
+                              std::vector<Vec3>& normal, std::vector<double>& volume,
+                              std::vector<std::uint32_t>& body) const {
   position = static_.position;
   normal = static_.normal;
   volume = static_.volume;
   body = static_.body;
   for (const MovingBody& m : moving_) {
-    const Pose& pose = bodies_[m.body].settings.pose;
+    const Pose& pose = at[m.body].pose;
     for (std::size_t k = 0; k < m.samples.position.size(); ++k) {
       position.push_back(pose.toWorld(m.samples.position[k]));
       normal.push_back(pose.rotate(m.samples.normal[k]));
@@ -250,13 +264,15 @@ void Boundaries::worldSamples(std::vector<Vec3>& position, std::vector<Vec3>& no
   }
 }
 
-void Boundaries::addDensity(const Fluid& fluid, std::vector<double>& density) const {
-  wallPass(fluid, density, nullptr, nullptr);
+void Boundaries::addDensity(const Fluid& fluid, const BodyPlacement& at,
+                            std::vector<double>& density) const {
+  wallPass(fluid, at, density, nullptr, nullptr);
 }
 
-void Boundaries::addWallTerms(const Fluid& fluid, std::vector<double>& density,
-                              std::vector<Vec3>& shear, std::vector<Wrench>& reaction) const {
-  wallPass(fluid, density, &shear, &reaction);
+void Boundaries::addWallTerms(const Fluid& fluid, const BodyPlacement& at,
+                              std::vector<double>& density, std::vector<Vec3>& shear,
+                              std::vector<Wrench>& reaction) const {
+  wallPass(fluid, at, density, &shear, &reaction);
 }
 
 double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u,
@@ -289,7 +305,8 @@ double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, cons
   return sum;
 }
 
-Vec3 Boundaries::pressureSum(const SampleSet& set, const Vec3& p, double pr2, Vec3* moment) const {
+Vec3 Boundaries::pressureSum(const SampleSet& set, const std::vector<double>& p_rho2, const Vec3& p,
+                             double pr2, Vec3* moment) const {
   const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
   Vec3 sum = Vec3::Zero();
   set.grid.forEachRangeWithin(p, set.density_reach, [&](std::uint32_t lo, std::uint32_t hi) {
@@ -298,7 +315,7 @@ Vec3 Boundaries::pressureSum(const SampleSet& set, const Vec3& p, double pr2, Ve
       const double d_sq = d.squaredNorm();
       if (d_sq >= support_sq) continue;
       const Vec3 g =
-          ((pr2 + set.p_rho2[k]) * set.volume[k] * kernel_.derivativeOverR(std::sqrt(d_sq))) * d;
+          ((pr2 + p_rho2[k]) * set.volume[k] * kernel_.derivativeOverR(std::sqrt(d_sq))) * d;
       sum += g;
       if (moment) *moment += set.position[k].cross(g);
     }
@@ -306,7 +323,7 @@ Vec3 Boundaries::pressureSum(const SampleSet& set, const Vec3& p, double pr2, Ve
   return sum;
 }
 
-void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
+void Boundaries::wallPass(const Fluid& fluid, const BodyPlacement& at, std::vector<double>& density,
                           std::vector<Vec3>* shear, std::vector<Wrench>* reaction) const {
   const FluidState& st = fluid.state();
   const std::vector<Vec3>& x = st.position;
@@ -340,23 +357,23 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
         sum += wallSums(static_, xi, nu, vi, zero, s, nullptr);
         a -= s;
       }
-      if (moving_reach_.contains(xi)) {
+      if (at.moving_reach.contains(xi)) {
         for (const MovingBody& m : moving_) {
-          if (!m.world_reach.contains(xi)) continue;
-          const Body& b = bodies_[m.body];
-          const Mat3 rt = b.rotation.transpose();
-          const Vec3 p = rt * (xi - b.settings.pose.position);
+          const BodyFrame& f = at[m.body];
+          if (!f.world_reach.contains(xi)) continue;
+          const Mat3 rt = f.rotation.transpose();
+          const Vec3 p = rt * (xi - f.pose.position);
           if (!m.samples.reach_box.contains(p)) continue;
-          const bool react = nu > 0.0 && b.settings.twoWay();
+          const bool react = nu > 0.0 && bodies_[m.body].settings.twoWay();
           Vec3 s = Vec3::Zero(), moment = Vec3::Zero();
-          sum += wallSums(m.samples, p, nu, rt * (vi - b.settings.linear_velocity),
-                          rt * b.settings.angular_velocity, s, react ? &moment : nullptr);
-          const Vec3 force = b.rotation * s;  // per unit fluid mass, on the body
+          sum += wallSums(m.samples, p, nu, rt * (vi - f.linear_velocity), rt * f.angular_velocity,
+                          s, react ? &moment : nullptr);
+          const Vec3 force = f.rotation * s;  // per unit fluid mass, on the body
           a -= force;
           if (react) {
             Wrench& w = chunk_reaction_[c * nb + m.body];
             w.force += mass * force;
-            w.torque += mass * (b.rotation * moment);
+            w.torque += mass * (f.rotation * moment);
           }
         }
       }
@@ -372,14 +389,16 @@ void Boundaries::wallPass(const Fluid& fluid, std::vector<double>& density,
     }
 }
 
-void Boundaries::addWallPressure(const Fluid& fluid, std::vector<Vec3>& extra,
+void Boundaries::addWallPressure(const Fluid& fluid, const BodyPlacement& at,
+                                 const SamplePressure& pressure, std::vector<Vec3>& extra,
                                  std::vector<Wrench>& reaction) const {
   const FluidState& st = fluid.state();
   const std::size_t n = st.size(), nb = bodies_.size();
   if (n == 0 || nb == 0) return;
-  bool ready = static_.p_rho2.size() == static_.position.size();
-  for (const MovingBody& m : moving_)
-    ready = ready && m.samples.p_rho2.size() == m.samples.position.size();
+  const std::vector<std::vector<double>>& p_rho2 = pressure.p_rho2;
+  bool ready = p_rho2.size() == moving_.size() + 1 && p_rho2[0].size() == static_.position.size();
+  for (std::size_t m = 0; m < moving_.size() && ready; ++m)
+    ready = p_rho2[m + 1].size() == moving_[m].samples.position.size();
   if (!ready) throw std::logic_error("Boundaries::addWallPressure before computeSamplePressure");
   if (extra.empty()) extra.assign(n, Vec3::Zero());
   const double rho0 = fluid_.rest_density;
@@ -398,21 +417,23 @@ void Boundaries::addWallPressure(const Fluid& fluid, std::vector<Vec3>& extra,
       const double pr2 = st.pressure[i] / (st.density[i] * st.density[i]);
       Vec3 a = Vec3::Zero();
       if (has_static && (static_.near[static_.grid.cellIndex(xi)] & kNearDensity))
-        a -= pressureSum(static_, xi, pr2, nullptr);
-      if (moving_reach_.contains(xi)) {
-        for (const MovingBody& m : moving_) {
-          if (!m.world_reach.contains(xi)) continue;
-          const Body& b = bodies_[m.body];
-          const Vec3 p = b.rotation.transpose() * (xi - b.settings.pose.position);
+        a -= pressureSum(static_, p_rho2[0], xi, pr2, nullptr);
+      if (at.moving_reach.contains(xi)) {
+        for (std::size_t mi = 0; mi < moving_.size(); ++mi) {
+          const MovingBody& m = moving_[mi];
+          const BodyFrame& f = at[m.body];
+          if (!f.world_reach.contains(xi)) continue;
+          const Vec3 p = f.rotation.transpose() * (xi - f.pose.position);
           if (!m.samples.reach_box.contains(p)) continue;
-          const bool react = b.settings.twoWay();
+          const bool react = bodies_[m.body].settings.twoWay();
           Vec3 moment = Vec3::Zero();
-          const Vec3 sum = b.rotation * pressureSum(m.samples, p, pr2, react ? &moment : nullptr);
+          const Vec3 sum = f.rotation * pressureSum(m.samples, p_rho2[mi + 1], p, pr2,
+                                                    react ? &moment : nullptr);
           a -= sum;
           if (react) {
             Wrench& w = chunk_reaction_[c * nb + m.body];
             w.force += (mass * rho0) * sum;
-            w.torque += (mass * rho0) * (b.rotation * moment);
+            w.torque += (mass * rho0) * (f.rotation * moment);
           }
         }
       }
@@ -428,18 +449,22 @@ void Boundaries::addWallPressure(const Fluid& fluid, std::vector<Vec3>& extra,
     }
 }
 
-void Boundaries::computeSamplePressure(const Fluid& fluid, const Vec3& gravity) {
-  samplePressure(fluid, static_, Mat3::Identity(), Vec3::Zero(), gravity);
-  for (MovingBody& m : moving_) {
-    const Body& b = bodies_[m.body];
-    samplePressure(fluid, m.samples, b.rotation, b.settings.pose.position, gravity);
+void Boundaries::computeSamplePressure(const Fluid& fluid, const BodyPlacement& at,
+                                       const Vec3& gravity, SamplePressure& out) const {
+  out.p_rho2.resize(moving_.size() + 1);
+  samplePressure(fluid, static_, Mat3::Identity(), Vec3::Zero(), gravity, out.p_rho2[0]);
+  for (std::size_t m = 0; m < moving_.size(); ++m) {
+    const BodyFrame& f = at[moving_[m].body];
+    samplePressure(fluid, moving_[m].samples, f.rotation, f.pose.position, gravity,
+                   out.p_rho2[m + 1]);
   }
 }
 
-void Boundaries::samplePressure(const Fluid& fluid, SampleSet& set, const Mat3& rotation,
-                                const Vec3& origin, const Vec3& gravity) const {
+void Boundaries::samplePressure(const Fluid& fluid, const SampleSet& set, const Mat3& rotation,
+                                const Vec3& origin, const Vec3& gravity,
+                                std::vector<double>& p_rho2) const {
   const std::size_t n = set.position.size();
-  set.p_rho2.assign(n, 0.0);
+  p_rho2.assign(n, 0.0);
   const FluidState& st = fluid.state();
   if (st.size() == 0 || n == 0) return;
   const UniformGrid& grid = fluid.grid();
@@ -467,31 +492,32 @@ void Boundaries::samplePressure(const Fluid& fluid, SampleSet& set, const Mat3& 
     const double p = std::max(0.0, (p_sum + gravity.dot(rise)) / w_sum);
     if (p == 0.0) continue;
     const double rho = fluid_.densityAt(p);
-    set.p_rho2[k] = p / (rho * rho);
+    p_rho2[k] = p / (rho * rho);
   }
 }
 
 template <class F>
-void Boundaries::forEachBodyDistance(const Vec3& x, F&& f) const {
+void Boundaries::forEachBodyDistance(const Vec3& x, const BodyPlacement& at, F&& f) const {
   if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
     for (const std::uint32_t bi : static_bodies_) {
-      const Body& b = bodies_[bi];
-      if (b.contact_bounds.contains(x))
-        f(bi, true, b.settings.shape->signedDistance(b.settings.pose.toBody(x)));
+      const BodyFrame& frame = at[bi];
+      if (frame.contact_bounds.contains(x))
+        f(bi, true, bodies_[bi].settings.shape->signedDistance(frame.pose.toBody(x)));
     }
   }
-  if (!moving_reach_.contains(x)) return;
+  if (!at.moving_reach.contains(x)) return;
   for (const MovingBody& m : moving_) {
-    if (!m.world_reach.contains(x)) continue;
-    const Body& b = bodies_[m.body];
-    const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
+    const BodyFrame& frame = at[m.body];
+    if (!frame.world_reach.contains(x)) continue;
+    const Vec3 p = frame.rotation.transpose() * (x - frame.pose.position);
     if (m.samples.reach_box.contains(p) &&
         (m.samples.near[m.samples.grid.cellIndex(p)] & (kNearContact | kInterior)))
-      f(m.body, false, b.settings.shape->signedDistance(p));
+      f(m.body, false, bodies_[m.body].settings.shape->signedDistance(p));
   }
 }
 
-std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxContacts>& out) const {
+std::size_t Boundaries::findContacts(const Vec3& x, const BodyPlacement& at,
+                                     std::array<Contact, kMaxContacts>& out) const {
   // A body is in contact when x is closer than the fluid radius to its exact surface: the
   // same test as the position correction and the penetration count, so that velocity
   // control stops fluid before the correction would have to move it (a correction of a
@@ -513,7 +539,7 @@ std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxCont
       if (out[q].distance > out[far].distance) far = q;
     if (d < out[far].distance) out[far].body = body, out[far].distance = d;
   };
-  forEachBodyDistance(x, [&](std::uint32_t body, bool, double d) { offer(body, d); });
+  forEachBodyDistance(x, at, [&](std::uint32_t body, bool, double d) { offer(body, d); });
   if (count == 0) return 0;
   std::sort(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(count),
             [](const Contact& a, const Contact& b) {
@@ -521,20 +547,21 @@ std::size_t Boundaries::findContacts(const Vec3& x, std::array<Contact, kMaxCont
             });
   std::size_t kept = 0;
   for (std::size_t c = 0; c < count; ++c)
-    if (contactGeometry(x, out[c])) out[kept++] = out[c];
+    if (contactGeometry(x, at, out[c])) out[kept++] = out[c];
   return kept;
 }
 
-bool Boundaries::contactGeometry(const Vec3& x, Contact& ct) const {
+bool Boundaries::contactGeometry(const Vec3& x, const BodyPlacement& at, Contact& ct) const {
   // n = grad SDF at x, x_cp = x - SDF(x) n: edges and corners push the fluid the
   // shortest way out.
   const Body& b = bodies_[ct.body];
+  const BodyFrame& frame = at[ct.body];
   const Shape& shape = *b.settings.shape;
-  const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
+  const Vec3 p = frame.rotation.transpose() * (x - frame.pose.position);
   const double d = ct.distance;
   const Vec3 grad = sdfGradient(shape, p, 1e-3 * radius_);
   if (!grad.isZero() && std::isfinite(d)) {
-    ct.normal = b.rotation * grad;
+    ct.normal = frame.rotation * grad;
     ct.point = x - d * ct.normal;
     return true;
   }
@@ -552,29 +579,30 @@ bool Boundaries::contactGeometry(const Vec3& x, Contact& ct) const {
     }
   });
   if (!std::isfinite(best)) return false;
-  ct.normal = b.rotation * set.normal[nearest];
-  ct.point = b.rotation * (set.position[nearest] + radius_ * set.normal[nearest]);
-  if (b.moving >= 0) ct.point += b.settings.pose.position;
+  ct.normal = frame.rotation * set.normal[nearest];
+  ct.point = frame.rotation * (set.position[nearest] + radius_ * set.normal[nearest]);
+  if (b.moving >= 0) ct.point += frame.pose.position;
   return true;
 }
 
-Boundaries::Clearance Boundaries::clearance(const Vec3& x) const {
+Boundaries::Clearance Boundaries::clearance(const Vec3& x, const BodyPlacement& at) const {
   Clearance c{radius_, radius_};
-  forEachBodyDistance(x, [&](std::uint32_t, bool is_static, double d) {
+  forEachBodyDistance(x, at, [&](std::uint32_t, bool is_static, double d) {
     c.all = std::min(c.all, d);
     if (is_static) c.walls = std::min(c.walls, d);
   });
   return c;
 }
 
-std::size_t Boundaries::countInside(const std::vector<Vec3>& x) const {
+std::size_t Boundaries::countInside(const std::vector<Vec3>& x, const BodyPlacement& at) const {
   const std::int64_t n = static_cast<std::int64_t>(x.size());
   std::size_t inside = 0;
 #pragma omp parallel for schedule(static) reduction(+ : inside)
   for (std::int64_t i = 0; i < n; ++i) {
-    for (const Body& b : bodies_) {
-      if (!b.world_bounds.contains(x[i])) continue;
-      if (b.settings.shape->contains(b.settings.pose.toBody(x[i]))) {
+    for (std::size_t b = 0; b < bodies_.size(); ++b) {
+      const BodyFrame& frame = at[b];
+      if (!frame.world_bounds.contains(x[i])) continue;
+      if (bodies_[b].settings.shape->contains(frame.pose.toBody(x[i]))) {
         ++inside;
         break;
       }
@@ -583,10 +611,10 @@ std::size_t Boundaries::countInside(const std::vector<Vec3>& x) const {
   return inside;
 }
 
-double Boundaries::signedDistance(const Vec3& x) const {
+double Boundaries::signedDistance(const Vec3& x, const BodyPlacement& at) const {
   double best = std::numeric_limits<double>::infinity();
-  for (const Body& b : bodies_)
-    best = std::min(best, b.settings.shape->signedDistance(b.settings.pose.toBody(x)));
+  for (std::size_t b = 0; b < bodies_.size(); ++b)
+    best = std::min(best, bodies_[b].settings.shape->signedDistance(at[b].pose.toBody(x)));
   return best;
 }
 

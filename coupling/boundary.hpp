@@ -1,14 +1,15 @@
-// Boundary particles of all bodies (DESIGN.md §3-4): sampling, the fluid's density share,
-// contacts, position correction and penetration counts.
+// Boundary particles of all bodies (DESIGN.md §3-4): sampling, the walls' part of the
+// fluid's sums (density share, viscous shear, pressure), contacts and penetration counts.
 //
 // Every body's surface is sampled once in body space (geometry/shape.hpp). Static bodies'
 // samples are placed in the world once, in flat arrays sorted by grid cell. A moving
 // (kinematic or dynamic) body keeps its samples in body space, sorted in its own grid;
 // a query transforms the fluid position into the body's frame, so moving a body costs
-// nothing but its new pose. Boundary particles take part in the fluid's density (their
-// share of the kernel support, so fluid at a wall has no density deficit) but exert no
-// pressure force: direct forcing (velocity control, then position correction) keeps fluid
-// out of the bodies.
+// nothing but its new pose. Boundaries hold no pose that changes: the rigid-body side owns
+// the bodies' states, and every query takes them as a BodyPlacement (place()). Boundary particles
+// take part in the fluid's density (their share of the kernel support, so fluid at a wall has no
+// density deficit) but exert no pressure force: direct forcing (velocity control, then position
+// correction) keeps fluid out of the bodies.
 #pragma once
 
 #include "coupling/rigid_body.hpp"
@@ -38,6 +39,35 @@ struct BodySettings : BodyFluidSettings {
   bool twoWay() const { return kind == BodyKind::Dynamic && coupling == CouplingMode::TwoWay; }
 };
 
+/// Where one body is at one instant, as the boundaries' queries need it: its pose and
+/// velocities (as the rigid-body side reports them) and what follows from them.
+struct BodyFrame {
+  Pose pose;                             ///< body -> world; position = centre of mass
+  Mat3 rotation = Mat3::Identity();      ///< the pose's rotation as a matrix
+  Vec3 linear_velocity = Vec3::Zero();   ///< m/s, of the centre of mass
+  Vec3 angular_velocity = Vec3::Zero();  ///< rad/s, world
+  Aabb world_bounds;                     ///< the exact shape's bounds in the world (clipped)
+  Aabb contact_bounds;                   ///< world_bounds grown by the fluid radius
+  Aabb world_reach;  ///< moving bodies: their samples' grid box in the world (kernel reach)
+};
+
+/// Every body's frame at one instant: how the boundaries' queries learn where the bodies
+/// are. Made by Boundaries::place() from the rigid-body side's states for one stage of a
+/// step (the bodies now, predicted, or at the step's end); a value, not a second owner of
+/// the bodies' poses. Static bodies' frames never change.
+struct BodyPlacement {
+  std::vector<BodyFrame> frames;  ///< (bodies)
+  Aabb moving_reach;              ///< union of the moving bodies' world_reach
+  const BodyFrame& operator[](std::size_t b) const { return frames[b]; }
+};
+
+/// The samples' pressure term P_k / rho_k^2 of one step (m^5 / (kg s^2)), per sample set
+/// (the static set first, then each moving body's): Boundaries::computeSamplePressure
+/// fills it, addWallPressure reads it. Scratch of the step.
+struct SamplePressure {
+  std::vector<std::vector<double>> p_rho2;
+};
+
 /// Contact of one fluid particle with one body: its centre is closer than the fluid
 /// radius to the body's exact surface.
 struct Contact {
@@ -57,25 +87,28 @@ class Boundaries {
   std::size_t addBody(const BodySettings& body);
   /// Sorts the static samples and computes every sample's volume. Call once.
   void finalize();
-  /// Moves a kinematic or dynamic body (its pose and velocities now). Cheap: a moving
-  /// body's samples stay in body space. Static bodies cannot be moved.
-  void setBodyState(std::size_t body, const RigidState& state);
+  /// The bodies' frames with every moving (kinematic or dynamic) body at `states[b]` (one
+  /// per body; static bodies' entries are not read: they stay where they were added).
+  /// Cheap: a moving body's samples stay in body space; per body, not per sample.
+  void place(const std::vector<RigidState>& states, BodyPlacement& out) const;
+  /// The bodies' frames at the poses and velocities they were added with.
+  BodyPlacement placeAtStart() const;
 
   std::size_t bodyCount() const { return bodies_.size(); }
+  /// A body as it was added (its pose and velocities are the start's).
   const BodySettings& body(std::size_t b) const { return bodies_[b].settings; }
-  RigidState bodyState(std::size_t b) const;
   std::size_t sampleCount() const;
   std::size_t bodySampleCount(std::size_t b) const { return bodies_[b].sample_count; }
   /// Largest distance of a body's samples from its origin (m): bounds surface speeds.
   double bodyExtent(std::size_t b) const { return bodies_[b].extent; }
 
   /// World positions, normals and volumes of all samples (static ones in cell order,
-  /// then each moving body's at its current pose). For output and tests; allocates.
-  void worldSamples(std::vector<Vec3>& position, std::vector<Vec3>& normal,
+  /// then each moving body's at its pose in `at`). For output and tests; allocates.
+  void worldSamples(const BodyPlacement& at, std::vector<Vec3>& position, std::vector<Vec3>& normal,
                     std::vector<double>& volume, std::vector<std::uint32_t>& body) const;
 
   /// Adds the boundary's share rho0 * sum_k V_k W(x_a - x_k) to each fluid density.
-  void addDensity(const Fluid& fluid, std::vector<double>& density) const;
+  void addDensity(const Fluid& fluid, const BodyPlacement& at, std::vector<double>& density) const;
 
   /// The walls' part of the fluid's sums, in one pass over the samples within the kernel
   /// support of each fluid particle (positions and velocities now, bodies at their states
@@ -94,8 +127,8 @@ class Boundaries {
   /// - `reaction` (bodies): the shear's force and torque (about the centre of mass) on
   ///   each two-way body; zero for the others. Summed in fixed particle chunks: the same
   ///   bits on any number of threads.
-  void addWallTerms(const Fluid& fluid, std::vector<double>& density, std::vector<Vec3>& shear,
-                    std::vector<Wrench>& reaction) const;
+  void addWallTerms(const Fluid& fluid, const BodyPlacement& at, std::vector<double>& density,
+                    std::vector<Vec3>& shear, std::vector<Wrench>& reaction) const;
 
   /// Each sample's pressure, extrapolated from the fluid near it (Adami, Hu & Adams 2012,
   /// "A generalized wall boundary condition for SPH"): the samples stand for fluid
@@ -106,8 +139,9 @@ class Boundaries {
   /// leaves room for, so concave corners and edges, thin gaps and free surfaces give the
   /// fluid's own pressure: a tank of fluid at rest stays at rest. rho_k = the fluid's
   /// equation of state inverted at P_k. Call after the fluid's pressure is known (this
-  /// step's densities with the walls' share) and before addWallPressure.
-  void computeSamplePressure(const Fluid& fluid, const Vec3& gravity);
+  /// step's densities with the walls' share) and before addWallPressure; written to `out`.
+  void computeSamplePressure(const Fluid& fluid, const BodyPlacement& at, const Vec3& gravity,
+                             SamplePressure& out) const;
 
   /// The walls' pressure force, once the samples' pressure is known: the samples are
   /// neighbours in the fluid's symmetric pressure term,
@@ -117,8 +151,8 @@ class Boundaries {
   /// n when empty) and the opposite force and its torque (about the centre of mass) to
   /// each two-way body's `reaction`. Summed in fixed particle chunks: the same bits on
   /// any number of threads.
-  void addWallPressure(const Fluid& fluid, std::vector<Vec3>& extra,
-                       std::vector<Wrench>& reaction) const;
+  void addWallPressure(const Fluid& fluid, const BodyPlacement& at, const SamplePressure& pressure,
+                       std::vector<Vec3>& extra, std::vector<Wrench>& reaction) const;
 
   /// Most bodies one fluid particle is in contact with at once (the nearest are kept).
   static constexpr std::size_t kMaxContacts = 8;
@@ -129,16 +163,20 @@ class Boundaries {
   /// (DESIGN.md §3: normals from the exact shape), so corners and edges push fluid out
   /// along the shortest way. The samples only tell where a surface may be near.
   /// Returns how many were written.
-  std::size_t findContacts(const Vec3& x, std::array<Contact, kMaxContacts>& out) const;
+  std::size_t findContacts(const Vec3& x, const BodyPlacement& at,
+                           std::array<Contact, kMaxContacts>& out) const;
   /// Calls f(body, x_k, p, d_sq, rotation, origin) for each boundary sample k within
-  /// contact reach (r_f + r_b) of the world point x, over the static bodies and every
+  /// contact reach (r_f + r_b) of the world point x (bodies placed at `at`), over the static
+  /// bodies and every
   /// moving one. x_k and p (that is x) are in the frame of the sample's set: the world for
   /// static bodies (rotation and origin null), the body's frame for moving ones (world =
   /// *rotation * v + *origin). d_sq = |p - x_k|^2. Used by the penalty force.
   template <class F>
-  void forEachSampleNear(const Vec3& x, F&& f) const;
-  /// True when x may be within contact reach of a moving body.
-  bool nearMovingBody(const Vec3& x) const { return moving_reach_.contains(x); }
+  void forEachSampleNear(const Vec3& x, const BodyPlacement& at, F&& f) const;
+  /// True when x may be within contact reach of a moving body placed at `at`.
+  static bool nearMovingBody(const Vec3& x, const BodyPlacement& at) {
+    return at.moving_reach.contains(x);
+  }
   bool hasMovingBodies() const { return !moving_.empty(); }
 
   /// How far x is from the bodies' exact surfaces, capped at the fluid radius r_f:
@@ -147,14 +185,15 @@ class Boundaries {
   struct Clearance {
     double all, walls;
   };
-  Clearance clearance(const Vec3& x) const;
+  Clearance clearance(const Vec3& x, const BodyPlacement& at) const;
   /// The fluid particles' radius r_f (m), also the samples' radius r_b.
   double fluidRadius() const { return radius_; }
 
-  /// Number of fluid centres strictly inside some body's exact shape.
-  std::size_t countInside(const std::vector<Vec3>& x) const;
-  /// Signed distance (m) from x to the nearest body surface (< 0 inside); +inf if none.
-  double signedDistance(const Vec3& x) const;
+  /// Number of fluid centres strictly inside some body's exact shape (bodies at `at`).
+  std::size_t countInside(const std::vector<Vec3>& x, const BodyPlacement& at) const;
+  /// Signed distance (m) from x to the nearest body surface (< 0 inside; bodies at `at`);
+  /// +inf if none.
+  double signedDistance(const Vec3& x, const BodyPlacement& at) const;
 
  private:
   /// Samples of one body in a grid: the static set (world space) or one moving body
@@ -164,7 +203,6 @@ class Boundaries {
     Aabb reach_box;  ///< where a query can find a sample within the kernel support
     std::vector<Vec3> position, normal;
     std::vector<double> volume;
-    std::vector<double> p_rho2;       ///< (n) P_k / rho_k^2 (m^5 / (kg s^2)), this step
     std::vector<std::uint32_t> body;  ///< owning body (static set)
     std::vector<std::uint8_t> near;   ///< (cells) kNear* bits
     int density_reach = 1;            ///< cells to search for the kernel support
@@ -175,16 +213,13 @@ class Boundaries {
     BodySettings settings;
     SurfaceSamples local;  ///< body-space samples (cleared after finalize)
     std::size_t sample_count = 0;
-    Aabb world_bounds;                 ///< bounds of the exact shape in world space (clipped)
-    Aabb contact_bounds;               ///< world_bounds grown by the fluid radius
-    double extent = 0.0;               ///< max |sample| in body space
-    std::int32_t moving = -1;          ///< index into moving_, or -1 (static)
-    Mat3 rotation = Mat3::Identity();  ///< body -> world
+    double extent = 0.0;       ///< max |sample| in body space
+    std::int32_t moving = -1;  ///< index into moving_, or -1 (static)
+    BodyFrame start;           ///< the frame it was added with (static bodies: always)
   };
   struct MovingBody {
     std::uint32_t body = 0;
     SampleSet samples;
-    Aabb world_reach;  ///< samples' bounds at the current pose, grown by the support
   };
   /// Bit 1: a sample within the kernel support may exist; bit 2: within contact reach;
   /// bit 4 (moving bodies): the cell lies inside the body, beyond contact reach of its
@@ -197,32 +232,34 @@ class Boundaries {
   /// whose surface may be within contact reach of x (or, moving bodies, that x may be
   /// deep inside): what findContacts and clearance look at.
   template <class F>
-  void forEachBodyDistance(const Vec3& x, F&& f) const;
+  void forEachBodyDistance(const Vec3& x, const BodyPlacement& at, F&& f) const;
   /// Sorts samples into `set` over `box` and computes their volumes.
   void buildSet(SampleSet& set, const Aabb& box, const std::vector<Vec3>& pos,
                 const std::vector<Vec3>& nrm, const std::vector<std::uint32_t>& body, bool flags);
-  void updateWorldBounds(Body& b);
+  /// The frame of body `b` at `state`.
+  BodyFrame frameAt(const Body& b, const RigidState& state) const;
   /// Calls f(k, dist_sq) for each sample k of `set` within contact reach of p (set space).
   template <class F>
   void forEachContactCandidate(const SampleSet& set, const Vec3& p, F&& f) const;
   /// Contact point and normal of a fluid centre x from the body's exact shape (its
   /// distance already in ct). False when neither the shape nor a sample gives a normal.
-  bool contactGeometry(const Vec3& x, Contact& ct) const;
+  bool contactGeometry(const Vec3& x, const BodyPlacement& at, Contact& ct) const;
   /// The sums of one set at p (set space) for a fluid particle of viscosity nu whose
   /// velocity relative to the set's frame is u (the set turns with omega, set space).
   /// Returns the density sum sum_k V_k W(p - x_k). When nu > 0 it also adds
   /// sum_k w_k (u - omega x x_k) to `shear` and, when `moment` is given,
   /// sum_k w_k x_k x (u - omega x x_k) to it (w_k of addWallTerms, 1/s).
   /// addDensity and addWallTerms: shear and reaction may be null (density only).
-  void wallPass(const Fluid& fluid, std::vector<double>& density, std::vector<Vec3>* shear,
-                std::vector<Wrench>* reaction) const;
+  void wallPass(const Fluid& fluid, const BodyPlacement& at, std::vector<double>& density,
+                std::vector<Vec3>* shear, std::vector<Wrench>* reaction) const;
   double wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u, const Vec3& omega,
                   Vec3& shear, Vec3* moment) const;
   /// sum_k V_k (pr2 + P_k / rho_k^2) grad W_ak over one set at p (set space), and its
   /// moment sum_k x_k x (...) when asked (two-way bodies).
-  Vec3 pressureSum(const SampleSet& set, const Vec3& p, double pr2, Vec3* moment) const;
-  void samplePressure(const Fluid& fluid, SampleSet& set, const Mat3& rotation, const Vec3& origin,
-                      const Vec3& gravity) const;
+  Vec3 pressureSum(const SampleSet& set, const std::vector<double>& p_rho2, const Vec3& p,
+                   double pr2, Vec3* moment) const;
+  void samplePressure(const Fluid& fluid, const SampleSet& set, const Mat3& rotation,
+                      const Vec3& origin, const Vec3& gravity, std::vector<double>& p_rho2) const;
 
   FluidParams fluid_;
   CubicSplineKernel kernel_;
@@ -234,7 +271,6 @@ class Boundaries {
   std::vector<std::uint32_t> static_bodies_;  ///< indices of the static bodies
   SampleSet static_;
   std::vector<MovingBody> moving_;
-  Aabb moving_reach_;  ///< union of the moving bodies' world_reach
   bool finalized_ = false;
   bool any_shear_ = false;  ///< some body has slip < 1
   /// Particles per chunk of addWallTerms' reaction sums (fixed: determinism).
@@ -257,21 +293,21 @@ inline void Boundaries::forEachContactCandidate(const SampleSet& set, const Vec3
 }
 
 template <class F>
-inline void Boundaries::forEachSampleNear(const Vec3& x, F&& f) const {
+inline void Boundaries::forEachSampleNear(const Vec3& x, const BodyPlacement& at, F&& f) const {
   if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
     forEachContactCandidate(static_, x, [&](std::uint32_t k, double d_sq) {
       f(static_.body[k], static_.position[k], x, d_sq, static_cast<const Mat3*>(nullptr),
         static_cast<const Vec3*>(nullptr));
     });
   }
-  if (!moving_reach_.contains(x)) return;
+  if (!at.moving_reach.contains(x)) return;
   for (const MovingBody& m : moving_) {
-    if (!m.world_reach.contains(x)) continue;
-    const Body& b = bodies_[m.body];
-    const Vec3 p = b.rotation.transpose() * (x - b.settings.pose.position);
+    const BodyFrame& frame = at[m.body];
+    if (!frame.world_reach.contains(x)) continue;
+    const Vec3 p = frame.rotation.transpose() * (x - frame.pose.position);
     if (!m.samples.reach_box.contains(p)) continue;
     forEachContactCandidate(m.samples, p, [&](std::uint32_t k, double d_sq) {
-      f(m.body, m.samples.position[k], p, d_sq, &b.rotation, &b.settings.pose.position);
+      f(m.body, m.samples.position[k], p, d_sq, &frame.rotation, &frame.pose.position);
     });
   }
 }

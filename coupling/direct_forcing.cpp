@@ -40,52 +40,71 @@ Vec6 GlobalSystem::solve(double inverse_mass, const Mat3& inverse_inertia) const
   return matrix(inverse_mass, inverse_inertia).ldlt().solve(b_);
 }
 
-ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMethod method, double dt,
-                                     const std::vector<Vec3>& x_pred,
-                                     const std::vector<Vec3>& v_old,
-                                     const std::vector<RigidState>& now,
-                                     const std::vector<RigidPrediction>& predicted,
-                                     std::vector<Vec3>& v, std::vector<std::uint8_t>& in_contact,
-                                     std::vector<Wrench>& wrench) {
-  const std::size_t n = x_pred.size(), nb = boundaries.bodyCount();
-  in_contact.assign(n, 0);
-  wrench.assign(nb, Wrench{});
-  ControlResult result;
-  if (nb == 0 || n == 0) return result;
-  const double m = particle_mass_;
-  const bool global = method == CouplingMethod::Global;
-  std::vector<std::uint8_t> two_way(nb);
-  for (std::size_t b = 0; b < nb; ++b)
-    two_way[b] = boundaries.body(b).twoWay() && predicted[b].inverse_mass > 0;
-
+double DirectForcing::normalMass(const Record& rec,
+                                 const std::vector<RigidPrediction>& predicted) const {
   // Effective mass of a normal impulse at a contact: 1 / (n^T K n).
-  auto normalMass = [&](const Record& rec) {
-    if (!two_way[rec.body]) return m;
-    const RigidPrediction& p = predicted[rec.body];
-    return 1.0 / normalCompliance(1.0 / m, p.inverse_mass, p.inverse_inertia_world, rec.lever,
-                                  rec.normal);
-  };
-  auto applyImpulse = [&](Chunk& ch, const Record& rec, const Vec3& j, Vec3& vi) {
-    vi += j / m;
-    if (!two_way[rec.body]) return;
-    ch.impulse[rec.body] -= j;
-    ch.angular[rec.body] -= rec.lever.cross(j);
-  };
-  // Passes that only remove approach velocity towards one of several bodies, whose
-  // contact points move with v_cp + extra(rec).
-  auto normalPasses = [&](Chunk& ch, const Record* rec, std::size_t count, Vec3& vi, auto&& extra,
-                          int passes) {
-    for (int pass = 0; pass < passes; ++pass) {
-      for (std::size_t c = 0; c < count; ++c) {
-        const double vn = (vi - rec[c].v_cp - extra(rec[c])).dot(rec[c].normal);
-        const double target_n = vn > 0.0 ? vn : rec[c].bounce;
-        if (vn < target_n)
-          applyImpulse(ch, rec[c], normalMass(rec[c]) * (target_n - vn) * rec[c].normal, vi);
-      }
-    }
-  };
+  const double m = particle_mass_;
+  if (!two_way_[rec.body]) return m;
+  const RigidPrediction& p = predicted[rec.body];
+  return 1.0 /
+         normalCompliance(1.0 / m, p.inverse_mass, p.inverse_inertia_world, rec.lever, rec.normal);
+}
 
+void DirectForcing::applyImpulse(Chunk& ch, const Record& rec, const Vec3& j, Vec3& vi) const {
+  vi += j / particle_mass_;
+  if (!two_way_[rec.body]) return;
+  ch.impulse[rec.body] -= j;
+  ch.angular[rec.body] -= rec.lever.cross(j);
+}
+
+template <class Extra>
+void DirectForcing::normalPasses(Chunk& ch, const Record* rec, std::size_t count, Vec3& vi,
+                                 const std::vector<RigidPrediction>& predicted, Extra&& extra,
+                                 int passes) const {
+  for (int pass = 0; pass < passes; ++pass) {
+    for (std::size_t c = 0; c < count; ++c) {
+      const double vn = (vi - rec[c].v_cp - extra(rec[c])).dot(rec[c].normal);
+      const double target_n = vn > 0.0 ? vn : rec[c].bounce;
+      if (vn < target_n)
+        applyImpulse(ch, rec[c], normalMass(rec[c], predicted) * (target_n - vn) * rec[c].normal,
+                     vi);
+    }
+  }
+}
+
+ControlResult DirectForcing::control(const Boundaries& boundaries, const ControlBodies& bodies,
+                                     const ControlFluid& fluid, CouplingMethod method, double dt,
+                                     std::vector<Wrench>& wrench) {
+  const std::size_t n = fluid.x_pred.size(), nb = boundaries.bodyCount();
+  fluid.in_contact.assign(n, 0);
+  wrench.assign(nb, Wrench{});
+  if (nb == 0 || n == 0) return {};
+  two_way_.assign(nb, 0);
+  for (std::size_t b = 0; b < nb; ++b)
+    two_way_[b] = boundaries.body(b).twoWay() && bodies.predicted[b].inverse_mass > 0;
   const std::size_t chunk_count = (n + kChunk - 1) / kChunk;
+  const ControlResult result = findContacts(boundaries, bodies, fluid, chunk_count);
+  if (method == CouplingMethod::Global)
+    solveGlobal(bodies.predicted, dt, chunk_count, fluid.v, wrench);
+  else
+    solveLocal(bodies.predicted, chunk_count, fluid.v);
+  for (std::size_t b = 0; b < nb; ++b) {
+    if (!two_way_[b]) continue;
+    Vec3 lin = Vec3::Zero(), ang = Vec3::Zero();
+    for (std::size_t c = 0; c < chunk_count; ++c) {
+      lin += chunks_[c].impulse[b];
+      ang += chunks_[c].angular[b];
+    }
+    wrench[b].force += lin / dt;
+    wrench[b].torque += ang / dt;
+  }
+  supportBackedContacts(dt, bodies.predicted, chunk_count, wrench);
+  return result;
+}
+
+ControlResult DirectForcing::findContacts(const Boundaries& boundaries, const ControlBodies& bodies,
+                                          const ControlFluid& fluid, std::size_t chunk_count) {
+  const std::size_t n = fluid.x_pred.size(), nb = boundaries.bodyCount();
   if (chunks_.size() < chunk_count) chunks_.resize(chunk_count);
   std::size_t particles = 0, contacts_total = 0;
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : particles, contacts_total)
@@ -94,80 +113,78 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMetho
     ch.records.clear();
     ch.impulse.assign(nb, Vec3::Zero());
     ch.angular.assign(nb, Vec3::Zero());
-    if (global) ch.system.assign(nb, GlobalSystem());
     std::array<Contact, Boundaries::kMaxContacts> contacts;
     const std::size_t end = std::min(n, (c + 1) * kChunk);
     for (std::size_t i = c * kChunk; i < end; ++i) {
-      const std::size_t count = boundaries.findContacts(x_pred[i], contacts);
+      const std::size_t count = boundaries.findContacts(fluid.x_pred[i], bodies.at, contacts);
       if (count == 0) continue;
-      in_contact[i] = 1;
+      fluid.in_contact[i] = 1;
       ++particles;
       contacts_total += count;
-      const std::size_t first = ch.records.size();
       for (std::size_t k = 0; k < count; ++k) {
         const Contact& ct = contacts[k];
-        const RigidPrediction& p = predicted[ct.body];
-        const BodySettings& body = boundaries.body(ct.body);
+        const RigidState& p = bodies.predicted[ct.body].state;
         Record rec;
         rec.particle = static_cast<std::uint32_t>(i);
         rec.body = ct.body;
         rec.count = static_cast<std::uint32_t>(count);
         rec.normal = ct.normal;
-        rec.lever = ct.point - p.state.pose.position;
-        rec.v_cp = p.state.linear_velocity + p.state.angular_velocity.cross(rec.lever);
+        rec.lever = ct.point - p.pose.position;
+        rec.v_cp = p.linear_velocity + p.angular_velocity.cross(rec.lever);
         // Restitution reflects only the approach speed at the start of the step.
-        const double vn_old = (v_old[i] - now[ct.body].pointVelocity(ct.point)).dot(ct.normal);
-        rec.bounce = -body.restitution * std::min(0.0, vn_old);
+        const double vn_old =
+            (fluid.v_old[i] - bodies.now[ct.body].pointVelocity(ct.point)).dot(ct.normal);
+        rec.bounce = -boundaries.body(ct.body).restitution * std::min(0.0, vn_old);
         // Eq. 8-9's normal part: restitution, and no sticking (a separating contact is
         // left alone). The tangential part is the walls' viscous shear, already in v*
         // (Boundaries::addWallTerms), so the control leaves it as it is.
-        const double vn = (v[i] - rec.v_cp).dot(ct.normal);  // predicted, v*_r . n
+        const double vn = (fluid.v[i] - rec.v_cp).dot(ct.normal);  // predicted, v*_r . n
         const double target_n = vn > 0.0 ? vn : rec.bounce;
         rec.psi = target_n - vn;
         ch.records.push_back(rec);
       }
-      if (global) {
-        for (std::size_t k = first; k < ch.records.size(); ++k) {
-          const Record& rec = ch.records[k];
-          if (two_way[rec.body])
-            ch.system[rec.body].add({m / double(rec.count), rec.lever, rec.normal, rec.psi});
-        }
-        continue;
-      }
-      // Local: each contact's normal impulse, then a few passes when there are several
-      // (an impulse towards one body must not push the particle into another).
-      Vec3 vi = v[i];
-      normalPasses(
-          ch, &ch.records[first], count, vi, [](const Record&) { return Vec3::Zero(); },
-          count > 1 ? 3 : 1);
-      v[i] = vi;
     }
   }
-  result.particles = particles;
-  result.contacts = contacts_total;
+  return {particles, contacts_total};
+}
 
-  auto reduceImpulses = [&] {
-    for (std::size_t b = 0; b < nb; ++b) {
-      if (!two_way[b]) continue;
-      Vec3 lin = Vec3::Zero(), ang = Vec3::Zero();
-      for (std::size_t c = 0; c < chunk_count; ++c) {
-        lin += chunks_[c].impulse[b];
-        ang += chunks_[c].angular[b];
-      }
-      wrench[b].force += lin / dt;
-      wrench[b].torque += ang / dt;
+void DirectForcing::solveLocal(const std::vector<RigidPrediction>& predicted,
+                               std::size_t chunk_count, std::vector<Vec3>& v) {
+  // Each contact's normal impulse, then a few passes when there are several (an impulse
+  // towards one body must not push the particle into another).
+  const auto none = [](const Record&) { return Vec3::Zero(); };
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunk_count); ++c) {
+    Chunk& ch = chunks_[c];
+    for (std::size_t k = 0; k < ch.records.size();) {
+      const Record* rec = &ch.records[k];
+      const std::size_t count = rec->count;
+      Vec3 vi = v[rec->particle];
+      normalPasses(ch, rec, count, vi, predicted, none, count > 1 ? 3 : 1);
+      v[rec->particle] = vi;
+      k += count;
     }
-  };
-  if (!global) {
-    reduceImpulses();
-    supportBackedContacts(dt, predicted, two_way, chunk_count, wrench);
-    return result;
   }
+}
 
-  // Global: one 6x6 solve per two-way body, summed over chunks in a fixed order.
+void DirectForcing::solveGlobal(const std::vector<RigidPrediction>& predicted, double dt,
+                                std::size_t chunk_count, std::vector<Vec3>& v,
+                                std::vector<Wrench>& wrench) {
+  // All contacts of one two-way body at once: one 6x6 solve per body, its system summed
+  // over chunks in a fixed order. A particle's mass is shared among its contacts.
+  const std::size_t nb = two_way_.size();
+  const double m = particle_mass_;
   std::vector<Vec6> change(nb, Vec6::Zero());  // [dV; dW]
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunk_count); ++c) {
+    Chunk& ch = chunks_[c];
+    ch.system.assign(nb, GlobalSystem());
+    for (const Record& rec : ch.records)
+      if (two_way_[rec.body])
+        ch.system[rec.body].add({m / double(rec.count), rec.lever, rec.normal, rec.psi});
+  }
   for (std::size_t b = 0; b < nb; ++b) {
-    if (!two_way[b]) continue;
+    if (!two_way_[b]) continue;
     GlobalSystem sum;
     for (std::size_t c = 0; c < chunk_count; ++c)
       sum.add(chunks_[c].system[b]);
@@ -178,15 +195,13 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMetho
     wrench[b].torque = inertiaFromInverse(p.inverse_inertia_world) * change[b].tail<3>() / dt;
   }
   auto bodyChange = [&](const Record& rec) -> Vec3 {
-    if (!two_way[rec.body]) return Vec3::Zero();
+    if (!two_way_[rec.body]) return Vec3::Zero();
     const Vec6& d = change[rec.body];
     return d.head<3>() + d.tail<3>().cross(rec.lever);
   };
 #pragma omp parallel for schedule(dynamic, 1)
   for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunk_count); ++c) {
     Chunk& ch = chunks_[c];
-    ch.impulse.assign(nb, Vec3::Zero());
-    ch.angular.assign(nb, Vec3::Zero());
     for (std::size_t k = 0; k < ch.records.size();) {
       const Record* rec = &ch.records[k];
       const std::size_t count = rec->count;
@@ -197,19 +212,16 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, CouplingMetho
       for (std::size_t q = 0; q < count; ++q)
         vi +=
             ((rec[q].psi + rec[q].normal.dot(bodyChange(rec[q]))) / double(count)) * rec[q].normal;
-      if (count > 1) normalPasses(ch, rec, count, vi, bodyChange, 2);
+      if (count > 1) normalPasses(ch, rec, count, vi, predicted, bodyChange, 2);
       v[i] = vi;
       k += count;
     }
   }
-  reduceImpulses();
-  supportBackedContacts(dt, predicted, two_way, chunk_count, wrench);
-  return result;
 }
 
 void DirectForcing::supportBackedContacts(double dt, const std::vector<RigidPrediction>& predicted,
-                                          const std::vector<std::uint8_t>& two_way,
                                           std::size_t chunk_count, std::vector<Wrench>& wrench) {
+  const std::vector<std::uint8_t>& two_way = two_way_;
   // A particle pressed between a two-way body and a one-way one (a box settling on the
   // floor, a body pushed against a wall) cannot give way: the one-way contact fixes its
   // normal velocity. So the two-way body meets it as it would meet the wall: the contact's

@@ -86,20 +86,33 @@ struct ControlResult {
   std::size_t contacts = 0;   ///< particle-body contacts
 };
 
+/// The bodies as the velocity control sees them in one step.
+struct ControlBodies {
+  const BodyPlacement& at;                        ///< placed at their predicted poses
+  const std::vector<RigidState>& now;             ///< (bodies) states at the step's start
+  const std::vector<RigidPrediction>& predicted;  ///< (bodies) predicted without fluid forces
+};
+
+/// The fluid as the velocity control sees it in one step (n particles each).
+struct ControlFluid {
+  const std::vector<Vec3>& x_pred;        ///< predicted positions x*
+  const std::vector<Vec3>& v_old;         ///< velocities at the step's start
+  std::vector<Vec3>& v;                   ///< v* in, controlled out
+  std::vector<std::uint8_t>& in_contact;  ///< out: 1 where the particle had a contact
+};
+
 class DirectForcing {
  public:
   explicit DirectForcing(const FluidParams& fluid) : particle_mass_(fluid.particleMass()) {}
 
-  /// Velocity control at the predicted positions. The boundaries must show the bodies at
-  /// their predicted poses (`predicted`); `now` are the body states at the step's start.
-  /// x_pred: x*; v_old: velocities at the step's start; v: v* in, controlled out.
-  /// in_contact: (n) 1 where the particle had a contact. wrench: (bodies) the fluid's
-  /// force and torque on each two-way body for this step (zero for one-way bodies).
-  ControlResult control(const Boundaries& boundaries, CouplingMethod method, double dt,
-                        const std::vector<Vec3>& x_pred, const std::vector<Vec3>& v_old,
-                        const std::vector<RigidState>& now,
-                        const std::vector<RigidPrediction>& predicted, std::vector<Vec3>& v,
-                        std::vector<std::uint8_t>& in_contact, std::vector<Wrench>& wrench);
+  /// Velocity control at the predicted positions, in three stages: the contacts and each
+  /// one's normal velocity change psi (findContacts), the impulses of the local or global
+  /// approach (solveLocal, solveGlobal), then the contacts that a one-way body backs
+  /// (supportBackedContacts). wrench: (bodies) the fluid's force and torque on each two-way
+  /// body for this step (zero for one-way bodies).
+  ControlResult control(const Boundaries& boundaries, const ControlBodies& bodies,
+                        const ControlFluid& fluid, CouplingMethod method, double dt,
+                        std::vector<Wrench>& wrench);
 
  private:
   struct Record {
@@ -116,23 +129,42 @@ class DirectForcing {
     Vec3 backer = Vec3::Zero();
   };
   struct Chunk {
-    std::vector<Record> records;
+    std::vector<Record> records;         ///< a particle's contacts are consecutive
     std::vector<Vec3> impulse, angular;  ///< (bodies) impulse of the fluid on each body
     std::vector<GlobalSystem> system;    ///< (bodies) global approach
   };
   static constexpr std::size_t kChunk = 2048;  ///< particles per chunk (fixed: determinism)
 
+  /// Every particle's contacts at x*, as records with their psi (eq. 8-9's normal part:
+  /// restitution, no sticking), in particle order per chunk.
+  ControlResult findContacts(const Boundaries& boundaries, const ControlBodies& bodies,
+                             const ControlFluid& fluid, std::size_t chunk_count);
+  /// Local: each contact alone, its effective mass from particle and body.
+  void solveLocal(const std::vector<RigidPrediction>& predicted, std::size_t chunk_count,
+                  std::vector<Vec3>& v);
+  /// Global: each two-way body's contacts at once (GlobalSystem); sets its wrench.
+  void solveGlobal(const std::vector<RigidPrediction>& predicted, double dt,
+                   std::size_t chunk_count, std::vector<Vec3>& v, std::vector<Wrench>& wrench);
   /// Contacts of two-way bodies with particles that a one-way body backs: their impulse
   /// goes to the body alone (projected Gauss-Seidel), so the body rests on the particle
   /// as on the wall behind it and cannot squeeze it into either.
   void supportBackedContacts(double dt, const std::vector<RigidPrediction>& predicted,
-                             const std::vector<std::uint8_t>& two_way, std::size_t chunk_count,
-                             std::vector<Wrench>& wrench);
+                             std::size_t chunk_count, std::vector<Wrench>& wrench);
+  /// Effective mass 1 / (n^T K n) of a normal impulse at a contact.
+  double normalMass(const Record& rec, const std::vector<RigidPrediction>& predicted) const;
+  /// Impulse j on the particle (velocity vi); its reaction into the chunk's body sums.
+  void applyImpulse(Chunk& ch, const Record& rec, const Vec3& j, Vec3& vi) const;
+  /// Passes over one particle's contacts that only remove approach velocity towards one
+  /// of them, whose contact points move with v_cp + extra(rec).
+  template <class Extra>
+  void normalPasses(Chunk& ch, const Record* rec, std::size_t count, Vec3& vi,
+                    const std::vector<RigidPrediction>& predicted, Extra&& extra, int passes) const;
 
   double particle_mass_;
   std::vector<Chunk> chunks_;
-  std::vector<Record> backed_;  ///< scratch: backed contacts, in particle order
-  std::vector<double> lambda_;  ///< scratch: their accumulated impulses (N s)
+  std::vector<std::uint8_t> two_way_;  ///< scratch: (bodies) 1 where the body reacts
+  std::vector<Record> backed_;         ///< scratch: backed contacts, in particle order
+  std::vector<double> lambda_;         ///< scratch: their accumulated impulses (N s)
 };
 
 }  // namespace wake

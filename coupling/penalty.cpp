@@ -8,8 +8,9 @@ namespace wake {
 PenaltyBoundary::PenaltyBoundary(const FluidParams& fluid, double strength)
     : particle_mass_(fluid.particleMass()), strength_(strength) {}
 
-std::size_t PenaltyBoundary::apply(const Boundaries& boundaries, const std::vector<Vec3>& x,
-                                   std::vector<Vec3>& accel, std::vector<std::uint8_t>& in_contact,
+std::size_t PenaltyBoundary::apply(const Boundaries& boundaries, const BodyPlacement& at,
+                                   const std::vector<Vec3>& x, std::vector<Vec3>& accel,
+                                   std::vector<std::uint8_t>& in_contact,
                                    std::vector<Wrench>& wrench) {
   const std::size_t n = x.size();
   const std::size_t nb = boundaries.bodyCount();
@@ -25,7 +26,7 @@ std::size_t PenaltyBoundary::apply(const Boundaries& boundaries, const std::vect
     Terms found;
     const std::size_t end = std::min(n, static_cast<std::size_t>(c + 1) * kChunk);
     for (std::size_t i = static_cast<std::size_t>(c) * kChunk; i < end; ++i) {
-      const std::size_t count = terms(boundaries, x[i], found);
+      const std::size_t count = terms(boundaries, at, x[i], found);
       if (count == 0) continue;
       in_contact[i] = 1;
       chunk.pairs += count;
@@ -44,7 +45,7 @@ std::size_t PenaltyBoundary::apply(const Boundaries& boundaries, const std::vect
       if (!boundaries.body(b).twoWay()) continue;
       // The body feels -m a_k at each sample x_k: F = -m sum a_k,
       // tau about the centre of mass c = -m (sum x_k x a_k - c x sum a_k).
-      const Vec3 c = boundaries.bodyState(b).pose.position;
+      const Vec3 c = at[b].pose.position;
       wrench[b].force -= particle_mass_ * chunk.accel[b];
       wrench[b].torque -= particle_mass_ * (chunk.moment[b] - c.cross(chunk.accel[b]));
     }
@@ -52,7 +53,8 @@ std::size_t PenaltyBoundary::apply(const Boundaries& boundaries, const std::vect
   return pairs;
 }
 
-std::size_t PenaltyBoundary::terms(const Boundaries& boundaries, const Vec3& x, Terms& out) const {
+std::size_t PenaltyBoundary::terms(const Boundaries& boundaries, const BodyPlacement& at,
+                                   const Vec3& x, Terms& out) const {
   const double r0 = 2.0 * boundaries.fluidRadius();
   const double strength = strength_;
   std::size_t count = 0;
@@ -75,13 +77,15 @@ std::size_t PenaltyBoundary::terms(const Boundaries& boundaries, const Vec3& x, 
     const double q12 = q4 * q4 * q4;
     return strength * (q12 - q4) / d_sq * (p - xk);
   };
-  boundaries.forEachSampleNear(x, [&](std::uint32_t body, const Vec3& xk, const Vec3& p,
-                                      double d_sq, const Mat3* rotation, const Vec3* origin) {
-    if (!rotation)
-      add(body, xk, term(p, xk, d_sq));
-    else
-      add(body, *rotation * xk + *origin, *rotation * term(p, xk, d_sq));
-  });
+  boundaries.forEachSampleNear(x, at,
+                               [&](std::uint32_t body, const Vec3& xk, const Vec3& p, double d_sq,
+                                   const Mat3* rotation, const Vec3* origin) {
+                                 if (!rotation)
+                                   add(body, xk, term(p, xk, d_sq));
+                                 else
+                                   add(body, *rotation * xk + *origin,
+                                       *rotation * term(p, xk, d_sq));
+                               });
   return count;
 }
 

@@ -28,14 +28,13 @@ class PenaltyBoundary {
   PenaltyBoundary(const FluidParams& fluid, double strength);
   double strength() const { return strength_; }
 
-  /// Adds the penalty accelerations at the positions x (bodies as the boundaries show
-  /// them) to `accel`. `wrench` (bodies): the reaction on each two-way body (zero for
-  /// the others). in_contact (n): 1 where a sample pushed. Returns the number of
-  /// particle-body pairs that interacted. Per-body sums are reduced in a fixed order,
-  /// so the result does not depend on the number of threads.
-  std::size_t apply(const Boundaries& boundaries, const std::vector<Vec3>& x,
-                    std::vector<Vec3>& accel, std::vector<std::uint8_t>& in_contact,
-                    std::vector<Wrench>& wrench);
+  /// Adds the penalty accelerations at the positions x (bodies placed at `at`) to `accel`. `wrench`
+  /// (bodies): the reaction on each two-way body (zero for the others). in_contact (n): 1 where a
+  /// sample pushed. Returns the number of particle-body pairs that interacted. Per-body sums are
+  /// reduced in a fixed order, so the result does not depend on the number of threads.
+  std::size_t apply(const Boundaries& boundaries, const BodyPlacement& at,
+                    const std::vector<Vec3>& x, std::vector<Vec3>& accel,
+                    std::vector<std::uint8_t>& in_contact, std::vector<Wrench>& wrench);
 
   /// The penalty force on a fluid centre x, per unit fluid mass, from every sample closer
   /// than r0 = r_f + r_b: a = D [(r0/d)^12 - (r0/d)^4] (x - x_k) / d^2. Per body it writes
@@ -47,7 +46,8 @@ class PenaltyBoundary {
     Vec3 moment = Vec3::Zero();  ///< m^2/s^2, sum of x_k x a_k (world)
   };
   using Terms = std::array<Term, Boundaries::kMaxContacts>;
-  std::size_t terms(const Boundaries& boundaries, const Vec3& x, Terms& out) const;
+  std::size_t terms(const Boundaries& boundaries, const BodyPlacement& at, const Vec3& x,
+                    Terms& out) const;
 
  private:
   struct Chunk {

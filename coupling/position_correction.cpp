@@ -9,11 +9,12 @@
 
 namespace wake {
 
-bool projectOut(const Boundaries& boundaries, Vec3& y, double s, int passes) {
+bool projectOut(const Boundaries& boundaries, const BodyPlacement& at, Vec3& y, double s,
+                int passes) {
   const double tolerance = 1e-6 * boundaries.fluidRadius();
   std::array<Contact, Boundaries::kMaxContacts> contacts;
   for (int pass = 0; pass < passes; ++pass) {
-    const std::size_t count = boundaries.findContacts(y, contacts);
+    const std::size_t count = boundaries.findContacts(y, at, contacts);
     bool moved = false;
     for (std::size_t c = 0; c < count; ++c) {
       const double d = s - (y - contacts[c].point).dot(contacts[c].normal);
@@ -24,7 +25,7 @@ bool projectOut(const Boundaries& boundaries, Vec3& y, double s, int passes) {
     }
     if (!moved) return true;
   }
-  return boundaries.clearance(y).all >= s - tolerance;
+  return boundaries.clearance(y, at).all >= s - tolerance;
 }
 
 namespace {
@@ -45,14 +46,14 @@ const std::array<Vec3, 26>& cubeDirections() {
 
 }  // namespace
 
-bool escape(const Boundaries& boundaries, Vec3& x) {
+bool escape(const Boundaries& boundaries, const BodyPlacement& at, Vec3& x) {
   // Rings half a radius apart out to eight spacings; on each, the 26 directions. The
   // nearest ring with a point where the particle can have half its radius from every
   // body wins (its point of most clearance); the straight path to it must not go deeper
   // into a body than the particle is now (less half a radius), nor into a static body at
   // all: fluid leaves a closed or too thin gap sideways, never through a wall or a body.
   const double rf = boundaries.fluidRadius();
-  const Boundaries::Clearance start = boundaries.clearance(x);
+  const Boundaries::Clearance start = boundaries.clearance(x, at);
   const double now = start.all;
   const double depth_limit = std::min(now, 0.0) - 0.5 * rf;
   const double static_limit = std::min(start.walls, 0.0) - 0.5 * rf;
@@ -65,25 +66,25 @@ bool escape(const Boundaries& boundaries, Vec3& x) {
     Vec3 chosen = x;
     for (const Vec3& u : cubeDirections()) {
       const Vec3 y = x + (ring * step) * u;
-      const Boundaries::Clearance at = boundaries.clearance(y);
-      const double c = at.all;
-      if (c <= now || at.walls < static_limit) continue;
+      const Boundaries::Clearance there = boundaries.clearance(y, at);
+      const double c = there.all;
+      if (c <= now || there.walls < static_limit) continue;
       bool open = true;
       for (int k = 1; k < ring && open; ++k) {
-        const Boundaries::Clearance q = boundaries.clearance(x + (k * step) * u);
+        const Boundaries::Clearance q = boundaries.clearance(x + (k * step) * u, at);
         open = q.all >= depth_limit && q.walls >= static_limit;
       }
       if (!open) continue;
       if (c > progress) progress = c, farthest = y;
       if (c < rf / 16.0 || c <= best) continue;
       Vec3 room = y;  // half a radius from every body there?
-      if (!projectOut(boundaries, room, 0.5 * rf, 3)) continue;
+      if (!projectOut(boundaries, at, room, 0.5 * rf, 3)) continue;
       best = c;
       chosen = room;
     }
     if (best > -std::numeric_limits<double>::infinity()) {
       Vec3 full = chosen;
-      x = projectOut(boundaries, full, rf, 4) ? full : chosen;
+      x = projectOut(boundaries, at, full, rf, 4) ? full : chosen;
       return true;
     }
   }
@@ -91,18 +92,18 @@ bool escape(const Boundaries& boundaries, Vec3& x) {
   return false;
 }
 
-std::size_t correctPositions(const Boundaries& boundaries, std::vector<Vec3>& x,
-                             const std::vector<std::uint8_t>& candidates) {
+std::size_t correctPositions(const Boundaries& boundaries, const BodyPlacement& at,
+                             std::vector<Vec3>& x, const std::vector<std::uint8_t>& candidates) {
   if (boundaries.bodyCount() == 0) return 0;
   const std::int64_t n = static_cast<std::int64_t>(x.size());
   const double rf = boundaries.fluidRadius();
   std::size_t stuck = 0;
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : stuck)
   for (std::int64_t i = 0; i < n; ++i) {
-    if (!candidates[i] && !boundaries.nearMovingBody(x[i])) continue;
+    if (!candidates[i] && !Boundaries::nearMovingBody(x[i], at)) continue;
     // Full clearance r_f from every body (the usual case: one pass, or a few in corners).
     Vec3 xi = x[i];
-    if (projectOut(boundaries, xi, rf, 4)) {
+    if (projectOut(boundaries, at, xi, rf, 4)) {
       x[i] = xi;
       continue;
     }
@@ -111,7 +112,7 @@ std::size_t correctPositions(const Boundaries& boundaries, std::vector<Vec3>& x,
     bool placed = false;
     for (double s = 0.5 * rf; s >= rf / 16.0 && !placed; s *= 0.5) {
       xi = x[i];
-      placed = projectOut(boundaries, xi, s, 4);
+      placed = projectOut(boundaries, at, xi, s, 4);
     }
     if (placed) {
       x[i] = xi;
@@ -119,7 +120,7 @@ std::size_t correctPositions(const Boundaries& boundaries, std::vector<Vec3>& x,
     }
     // No room between them (the gap is closed): out of it, sideways.
     xi = x[i];
-    if (!escape(boundaries, xi)) ++stuck;
+    if (!escape(boundaries, at, xi)) ++stuck;
     x[i] = xi;
   }
   return stuck;

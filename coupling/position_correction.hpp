@@ -28,17 +28,18 @@ namespace wake {
 /// with static bodies, a particle without a contact at its predicted position x* has
 /// none at its final one (uncontrolled particles end exactly at x*). Returns the number
 /// of particles that no move could free (0 unless bodies enclose fluid entirely).
-std::size_t correctPositions(const Boundaries& boundaries, std::vector<Vec3>& x,
-                             const std::vector<std::uint8_t>& candidates);
+std::size_t correctPositions(const Boundaries& boundaries, const BodyPlacement& at,
+                             std::vector<Vec3>& x, const std::vector<std::uint8_t>& candidates);
 
 /// Gauss-Seidel projections of y to clearance s from every body in contact (contacts found
 /// again after each pass), at most `passes` passes. True when y ends with clearance >= s
 /// (to a tolerance).
-bool projectOut(const Boundaries& boundaries, Vec3& y, double s, int passes);
+bool projectOut(const Boundaries& boundaries, const BodyPlacement& at, Vec3& y, double s,
+                int passes);
 
 /// Moves x to the nearest point where it can have r_f / 2 from every body, reachable
 /// without crossing a body (see correctPositions). False when there is none within eight
 /// spacings: then x moves to the point of most clearance found, if more than it has now.
-bool escape(const Boundaries& boundaries, Vec3& x);
+bool escape(const Boundaries& boundaries, const BodyPlacement& at, Vec3& x);
 
 }  // namespace wake

@@ -168,10 +168,7 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
   for (const BodySettings& b : s.bodies)
     boundaries_->addBody(b);
   boundaries_->finalize();
-  work_.body_now.resize(s.bodies.size());
-  for (std::size_t b = 0; b < s.bodies.size(); ++b)
-    work_.body_now[b] = rigid_->state(b);
-  placeBodies(work_.body_now);
+  const BodyPlacement start = placement();
   wrench_.assign(s.bodies.size(), Wrench{});
 
   // Fill the blocks on the lattice; drop particles outside the domain, inside a body, or
@@ -191,7 +188,7 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
         for (int i = 0; i < count[0]; ++i) {
           const Vec3 x = b.min + sp * Vec3(i + 0.5, j + 0.5, k + 0.5);
           const bool inside_domain = s.domain.contains(x);
-          if (!inside_domain || boundaries_->signedDistance(x) < (1.0 - 1e-6) * rf) {
+          if (!inside_domain || boundaries_->signedDistance(x, start) < (1.0 - 1e-6) * rf) {
             ++run_.removed_at_start;
             ++next_id;
             continue;
@@ -209,7 +206,7 @@ std::size_t Simulation::boundaryParticles() const {
 }
 
 std::size_t Simulation::countPenetrating() const {
-  return boundaries_->countInside(fluid_->state().position);
+  return boundaries_->countInside(fluid_->state().position, placement());
 }
 
 void Simulation::removeOutsideDomain() {
@@ -260,9 +257,18 @@ void Simulation::fail(const FluidHealth& health) {
   throw *failure_;
 }
 
-void Simulation::placeBodies(const std::vector<RigidState>& states) {
-  for (std::size_t b = 0; b < states.size(); ++b)
-    if (boundaries_->body(b).moves()) boundaries_->setBodyState(b, states[b]);
+void Simulation::currentStates(std::vector<RigidState>& out) const {
+  out.resize(rigid_->count());
+  for (std::size_t b = 0; b < out.size(); ++b)
+    out[b] = rigid_->state(b);
+}
+
+BodyPlacement Simulation::placement() const {
+  std::vector<RigidState> states;
+  currentStates(states);
+  BodyPlacement at;
+  boundaries_->place(states, at);
+  return at;
 }
 
 double Simulation::chooseDt(double t_limit) const {
@@ -270,7 +276,7 @@ double Simulation::chooseDt(double t_limit) const {
   double v_max = fluid_->maxSpeed();
   for (std::size_t b = 0; b < boundaries_->bodyCount(); ++b) {
     if (!boundaries_->body(b).moves()) continue;
-    const RigidState s = boundaries_->bodyState(b);
+    const RigidState& s = work_.body_now[b];
     v_max = std::max(
         v_max, s.linear_velocity.norm() + s.angular_velocity.norm() * boundaries_->bodyExtent(b));
   }
@@ -286,27 +292,50 @@ double Simulation::chooseDt(double t_limit) const {
 double Simulation::step(double t_limit) {
   if (failure_) throw *failure_;
   if (!(t_limit > run_.time)) return 0.0;
-  FluidState& st = fluid_->state();
-
+  findNeighbors();
+  computeFluidForces();
   auto t0 = Clock::now();
+  const double dt = chooseDt(t_limit);
+  timings_.integration += secondsSince(t0);
+  predict(dt);
+  const ControlResult control = controlVelocities(dt);
+  stepBodies(dt);
+  integrateAndCorrect(dt, control);
+  run_.time = (t_limit - run_.time == dt) ? t_limit : run_.time + dt;
+  run_.last_dt = dt;
+  ++run_.steps;
+  checkHealth();
+  return dt;
+}
+
+void Simulation::findNeighbors() {
+  // The bodies as the rigid-body side has them now, placed for the walls' sums.
+  const auto t0 = Clock::now();
+  currentStates(work_.body_now);
+  boundaries_->place(work_.body_now, work_.placed);
   removeOutsideDomain();
   fluid_->updateNeighbors();
   timings_.neighbors += secondsSince(t0);
+}
 
-  t0 = Clock::now();
+void Simulation::computeFluidForces() {
+  FluidState& st = fluid_->state();
+  auto t0 = Clock::now();
   fluid_->computeFluidDensity();
   timings_.density += secondsSince(t0);
   t0 = Clock::now();
   // The walls' density share and viscous shear (their part of the fluid's sums).
-  boundaries_->addWallTerms(*fluid_, st.density, work_.wall_shear, work_.wall_reaction);
+  boundaries_->addWallTerms(*fluid_, work_.placed, st.density, work_.wall_shear,
+                            work_.wall_reaction);
   timings_.boundary += secondsSince(t0);
   t0 = Clock::now();
   fluid_->computePressure();
   timings_.density += secondsSince(t0);
   t0 = Clock::now();
   // The walls' pressure force: the samples at the fluid's pressure there.
-  boundaries_->computeSamplePressure(*fluid_, model_.gravity);
-  boundaries_->addWallPressure(*fluid_, work_.wall_shear, work_.wall_reaction);
+  boundaries_->computeSamplePressure(*fluid_, work_.placed, model_.gravity, work_.sample_pressure);
+  boundaries_->addWallPressure(*fluid_, work_.placed, work_.sample_pressure, work_.wall_shear,
+                               work_.wall_reaction);
   timings_.boundary += secondsSince(t0);
 
   t0 = Clock::now();
@@ -315,13 +344,12 @@ double Simulation::step(double t_limit) {
   if (penalty_) {
     // Baseline: boundary forces join the fluid's forces; no control, no correction.
     t0 = Clock::now();
-    run_.last_contacts =
-        penalty_->apply(*boundaries_, st.position, st.acceleration, work_.flags, wrench_);
+    run_.last_contacts = penalty_->apply(*boundaries_, work_.placed, st.position, st.acceleration,
+                                         work_.flags, wrench_);
     const double t_penalty = secondsSince(t0);
     timings_.control += t_penalty;
     timings_.boundary += t_penalty;
   }
-
   if (fluid_forces_) {
     t0 = Clock::now();
     fluid_forces_(st, st.acceleration, run_.time);
@@ -329,79 +357,82 @@ double Simulation::step(double t_limit) {
       throw std::logic_error("FluidForces changed the size of the acceleration array");
     timings_.forces += secondsSince(t0);
   }
+}
 
-  // Predict: v* = v + dt a, x* = x + dt v* (all forces but direct forcing's).
-  t0 = Clock::now();
-  const double dt = chooseDt(t_limit);
+void Simulation::predict(double dt) {
+  // v* = v + dt a, x* = x + dt v* (all forces but direct forcing's); the bodies over dt
+  // without fluid forces.
+  auto t0 = Clock::now();
   fluid_->predict(dt, work_.x_pred, work_.v_old);
   timings_.integration += secondsSince(t0);
-
-  // Bodies predicted over dt without fluid forces; contacts and velocity control there.
   t0 = Clock::now();
-  const std::size_t nb = boundaries_->bodyCount();
-  for (std::size_t b = 0; b < nb; ++b)
-    work_.body_now[b] = rigid_->state(b);
   rigid_->predict(dt, work_.body_pred);
   timings_.rigid += secondsSince(t0);
+}
 
-  ControlResult control;
-  if (!penalty_) {
-    t0 = Clock::now();
-    std::vector<RigidState>& pred_states = work_.body_final;  // scratch reuse
-    pred_states.resize(nb);
-    for (std::size_t b = 0; b < nb; ++b)
-      pred_states[b] = work_.body_pred[b].state;
-    placeBodies(pred_states);
-    control = forcing_.control(*boundaries_, model_.method, dt, work_.x_pred, work_.v_old,
-                               work_.body_now, work_.body_pred, st.velocity, work_.flags, wrench_);
-    run_.last_contacts = control.contacts;
-    const double t_control = secondsSince(t0);
-    timings_.control += t_control;
-    timings_.boundary += t_control;
-  }
+ControlResult Simulation::controlVelocities(double dt) {
+  if (penalty_) return {};
+  // Contacts and velocity control with the bodies at their predicted poses.
+  const auto t0 = Clock::now();
+  const std::size_t nb = boundaries_->bodyCount();
+  std::vector<RigidState>& predicted = work_.body_final;  // scratch reuse
+  predicted.resize(nb);
+  for (std::size_t b = 0; b < nb; ++b)
+    predicted[b] = work_.body_pred[b].state;
+  boundaries_->place(predicted, work_.placed);
+  FluidState& st = fluid_->state();
+  const ControlResult control = forcing_.control(
+      *boundaries_, {work_.placed, work_.body_now, work_.body_pred},
+      {work_.x_pred, work_.v_old, st.velocity, work_.flags}, model_.method, dt, wrench_);
+  run_.last_contacts = control.contacts;
+  const double t_control = secondsSince(t0);
+  timings_.control += t_control;
+  timings_.boundary += t_control;
+  return control;
+}
 
+void Simulation::stepBodies(double dt) {
   // The bodies take exactly one step with the fluid's wrench: control (or penalty) plus
-  // the walls' viscous shear.
+  // the walls' viscous shear and pressure.
+  const auto t0 = Clock::now();
+  const std::size_t nb = boundaries_->bodyCount();
   for (std::size_t b = 0; b < nb; ++b) {
     wrench_[b].force += work_.wall_reaction[b].force;
     wrench_[b].torque += work_.wall_reaction[b].torque;
   }
-  t0 = Clock::now();
   if (nb > 0) rigid_->step(dt, wrench_);
-  work_.body_final.resize(nb);
-  for (std::size_t b = 0; b < nb; ++b)
-    work_.body_final[b] = rigid_->state(b);
+  currentStates(work_.body_final);
   timings_.rigid += secondsSince(t0);
+}
 
-  t0 = Clock::now();
+void Simulation::integrateAndCorrect(double dt, const ControlResult& control) {
+  auto t0 = Clock::now();
   fluid_->integratePositions(dt);
   timings_.integration += secondsSince(t0);
-
-  // Position correction against the bodies' final poses.
+  // Position correction against the bodies' final poses (also where the step's health
+  // counts penetration).
   t0 = Clock::now();
-  placeBodies(work_.body_final);
+  boundaries_->place(work_.body_final, work_.placed);
   if (!penalty_ && (control.particles > 0 || boundaries_->hasMovingBodies()))
-    correctPositions(*boundaries_, st.position, work_.flags);
+    correctPositions(*boundaries_, work_.placed, fluid_->state().position, work_.flags);
   const double t_correction = secondsSince(t0);
   timings_.correction += t_correction;
   timings_.boundary += t_correction;
+}
 
-  run_.time = (t_limit - run_.time == dt) ? t_limit : run_.time + dt;
-  run_.last_dt = dt;
-  ++run_.steps;
-
-  // Health: finite positions and velocities, the density ratio's limit; penetration
-  // against the exact shapes.
+void Simulation::checkHealth() {
+  // Finite positions and velocities, the density ratio's limit; penetration against the
+  // exact shapes at the bodies' final poses.
+  const FluidState& st = fluid_->state();
   const FluidHealth health =
       checkFluidHealth(st, model_.fluid.rest_density, model_.health.max_density_ratio);
   if (!health.ok()) fail(health);
   const double ratio = health.max_density_ratio;
-  const std::size_t penetrating = countPenetrating();
+  const std::size_t penetrating = boundaries_->countInside(st.position, work_.placed);
   run_.max_density_ratio = std::max(run_.max_density_ratio, ratio);
   run_.max_penetrating = std::max(run_.max_penetrating, penetrating);
   run_.window_density_ratio = std::max(run_.window_density_ratio, ratio);
   run_.window_penetrating = std::max(run_.window_penetrating, penetrating);
-  return dt;
 }
 
 void Simulation::advanceTo(double t) {
@@ -435,10 +466,6 @@ void Simulation::restoreState(const SimulationState& s) {
   run_ = s.run;
   wrench_ = s.wrenches;
   failure_.reset();
-  // The boundaries see the bodies where the rigid-body side now has them.
-  for (std::size_t b = 0; b < work_.body_now.size(); ++b)
-    work_.body_now[b] = rigid_->state(b);
-  placeBodies(work_.body_now);
 }
 
 void Simulation::snapshot(FluidSnapshot& out) const {

@@ -223,15 +223,37 @@ class Simulation {
 
   void snapshot(FluidSnapshot& out) const;
   std::vector<BodyState> bodyStates() const;
+  /// The bodies placed where the rigid-body side has them now (for the boundaries'
+  /// queries: Boundaries::worldSamples, countInside, ...).
+  BodyPlacement placement() const;
   const StepTimings& timings() const { return timings_; }
 
  private:
+  // The step's stages, in order (DESIGN.md §5, Algorithm 1).
+  /// Lost particles out, the fluid's neighbours, the bodies placed where they are now.
+  void findNeighbors();
+  /// Density (with the walls' share), pressure, the walls' pressure and shear, the
+  /// fluid's forces, the penalty force (method Penalty), the user's forces.
+  void computeFluidForces();
+  /// The time step: CFL on the fluid's and the moving surfaces' speeds, the fluid's
+  /// accelerations and viscosity, max_dt; lands on t_limit.
   double chooseDt(double t_limit) const;
+  /// Fluid v*, x*; bodies predicted over dt without fluid forces.
+  void predict(double dt);
+  /// Direct forcing's velocity control at x*, bodies placed at their predictions.
+  ControlResult controlVelocities(double dt);
+  /// One rigid-body step with the fluid's wrench.
+  void stepBodies(double dt);
+  /// x(t + dt) from the controlled velocities; position correction at the final poses.
+  void integrateAndCorrect(double dt, const ControlResult& control);
+  /// Health limits and penetration count after the step.
+  void checkHealth();
+
   void removeOutsideDomain();
   /// Throws HealthError for `health`'s problem (and remembers it: the run stays stopped).
   [[noreturn]] void fail(const FluidHealth& health);
-  /// Shows every moving body to the boundaries at the given states.
-  void placeBodies(const std::vector<RigidState>& states);
+  /// Every body's state as the rigid-body side has it now.
+  void currentStates(std::vector<RigidState>& out) const;
 
   const SimulationSettings settings_;  // as given
   SimulationSettings model_;           // resolved in the constructor, constant after
@@ -253,6 +275,8 @@ class Simulation {
     std::vector<RigidPrediction> body_pred;        // (bodies) predicted states
     std::vector<Vec3> wall_shear;                  // (n) the walls' viscous shear, m/s^2
     std::vector<Wrench> wall_reaction;             // (bodies) its reaction on two-way bodies
+    SamplePressure sample_pressure;                // the boundary samples' pressure
+    BodyPlacement placed;  // the bodies placed for the current stage (now, predicted, final)
   } work_;
   std::optional<HealthError> failure_;  // the error that stopped the run
   FluidForces fluid_forces_;            // the user's, or empty

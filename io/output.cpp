@@ -148,7 +148,8 @@ struct FrameWriter::Impl : hdf5::Writer {
     std::vector<Vec3> position, normal;
     std::vector<double> volume;
     std::vector<std::uint32_t> owner;
-    boundaries.worldSamples(position, normal, volume, owner);
+    const BodyPlacement at = sim.placement();
+    boundaries.worldSamples(at, position, normal, volume, owner);
     std::vector<std::vector<Vec3>> points(boundaries.bodyCount()), normals(boundaries.bodyCount());
     for (std::size_t b = 0; b < boundaries.bodyCount(); ++b) {
       points[b].reserve(boundaries.bodySampleCount(b));
@@ -157,7 +158,7 @@ struct FrameWriter::Impl : hdf5::Writer {
     for (std::size_t k = 0; k < position.size(); ++k) {
       const std::uint32_t b = owner[k];
       if (b >= boundaries.bodyCount()) continue;
-      const Pose& pose = boundaries.body(b).pose;
+      const Pose& pose = at[b].pose;
       points[b].push_back(pose.toBody(position[k]));
       normals[b].push_back(pose.orientation.conjugate() * normal[k]);
     }

@@ -56,8 +56,8 @@ TEST(Correction, SqueezedParticleStaysInTheGapClearOfBoth) {
       for (double px = -0.02; px <= 0.02 + 1e-12; px += 0.01)
         x.emplace_back(px, y, 0.013 * px / 0.02);
     const std::vector<std::uint8_t> all(x.size(), 1);
-    EXPECT_EQ(correctPositions(*b, x, all), 0u);
-    EXPECT_EQ(b->countInside(x), 0u) << "gap " << gap;
+    EXPECT_EQ(correctPositions(*b, b->placeAtStart(), x, all), 0u);
+    EXPECT_EQ(b->countInside(x, b->placeAtStart()), 0u) << "gap " << gap;
     for (const Vec3& p : x) {
       EXPECT_GE(floorDistance(*b, p), 0.24 * gap) << "gap " << gap << " at " << p.transpose();
       EXPECT_GE(boxDistance(*b, p), 0.24 * gap) << "gap " << gap << " at " << p.transpose();
@@ -80,8 +80,8 @@ TEST(Correction, FluidInAClosedGapLeavesSidewaysNeverThroughTheFloor) {
           start.push_back(Vec3(u, 0.3 * kR, w));
       std::vector<Vec3> x = start;
       const std::vector<std::uint8_t> all(x.size(), 1);
-      EXPECT_EQ(correctPositions(*b, x, all), 0u);
-      EXPECT_EQ(b->countInside(x), 0u) << "gap " << gap << " angle " << angle;
+      EXPECT_EQ(correctPositions(*b, b->placeAtStart(), x, all), 0u);
+      EXPECT_EQ(b->countInside(x, b->placeAtStart()), 0u) << "gap " << gap << " angle " << angle;
       for (std::size_t i = 0; i < x.size(); ++i) {
         const Vec3 local = b->body(1).pose.toBody(start[i]);
         // The way out under the box: its nearest side (in the box's frame), plus the
@@ -111,9 +111,9 @@ TEST(Correction, FluidInsideABodyMovedOntoItGoesToTheNearestFreeSide) {
     start.emplace_back(ux(rng), uy(rng), uz(rng));
   std::vector<Vec3> x = start;
   const std::vector<std::uint8_t> all(x.size(), 1);
-  const std::size_t stuck = correctPositions(*b, x, all);
+  const std::size_t stuck = correctPositions(*b, b->placeAtStart(), x, all);
   EXPECT_EQ(stuck, 0u);
-  EXPECT_EQ(b->countInside(x), 0u);
+  EXPECT_EQ(b->countInside(x, b->placeAtStart()), 0u);
   for (std::size_t i = 0; i < x.size(); ++i) {
     const Vec3 p = start[i] - b->body(1).pose.position;
     // Free faces: the four sides and the top.
@@ -131,7 +131,7 @@ TEST(Correction, ParticlesAwayFromBodiesDoNotMove) {
   std::vector<Vec3> x = {Vec3(0.1, 0.05, 0), Vec3(0, 0.066, 0), Vec3(0.0, 1.0 * kR, 0.1)};
   const std::vector<Vec3> start = x;
   const std::vector<std::uint8_t> all(x.size(), 1);
-  EXPECT_EQ(correctPositions(*b, x, all), 0u);
+  EXPECT_EQ(correctPositions(*b, b->placeAtStart(), x, all), 0u);
   for (std::size_t i = 0; i < x.size(); ++i)
     EXPECT_EQ(x[i], start[i]);
 }

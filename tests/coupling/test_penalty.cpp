@@ -24,14 +24,18 @@ TEST(Penalty, PushesAlongTheNormalOnlyWithinReach) {
   const PenaltyBoundary penalty(fluid, 10.0);
   double previous = 0.0;
   for (const double h : {0.8 * r, 0.5 * r, 0.2 * r}) {
-    ASSERT_EQ(penalty.terms(boundaries, Vec3(0.01, 0.05 + h, 0.01), terms), 1u);
+    ASSERT_EQ(
+        penalty.terms(boundaries, boundaries.placeAtStart(), Vec3(0.01, 0.05 + h, 0.01), terms),
+        1u);
     const Vec3 a = terms[0].accel;
     EXPECT_GT(a.y(), 0.0) << "h " << h;
     EXPECT_LT(std::hypot(a.x(), a.z()), 1e-9 * a.y()) << "h " << h;  // right above the sample
     EXPECT_GT(a.y(), previous) << "closer must push harder";
     previous = a.y();
   }
-  EXPECT_EQ(penalty.terms(boundaries, Vec3(0.01, 0.05 + 1.01 * r, 0.01), terms), 0u);
+  EXPECT_EQ(penalty.terms(boundaries, boundaries.placeAtStart(), Vec3(0.01, 0.05 + 1.01 * r, 0.01),
+                          terms),
+            0u);
 }
 
 TEST(Penalty, FluidPlusBodyMomentumIsConserved) {

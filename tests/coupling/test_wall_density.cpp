@@ -35,7 +35,7 @@ struct WallFixture {
                                 Vec3::Zero(), id++, fluid->params().kinematic_viscosity);
     fluid->updateNeighbors();
     fluid->computeFluidDensity();
-    walls->addDensity(*fluid, fluid->state().density);
+    walls->addDensity(*fluid, walls->placeAtStart(), fluid->state().density);
   }
 
   double densityAt(const Vec3& p) const {
@@ -68,7 +68,7 @@ TEST(WallDensity, SampleVolumesMatchTheFluidLatticeOnAFlatFace) {
   std::vector<Vec3> position, normal;
   std::vector<double> volume;
   std::vector<std::uint32_t> body;
-  w.worldSamples(position, normal, volume, body);
+  w.worldSamples(w.placeAtStart(), position, normal, volume, body);
   ASSERT_EQ(position.size(), w.sampleCount());
   std::size_t checked = 0;
   for (std::size_t k = 0; k < w.sampleCount(); ++k) {

@@ -301,10 +301,10 @@ TEST(BodyContact, KinematicPlatePressesABoxOnTheFloorAndTheFluidBetweenGoesSidew
     // Between them: within a radius of the box's top face (in its frame: it may have
     // turned) and of the plate.
     const Boundaries& walls = world.simulation().boundaries();
+    const BodyPlacement at = world.simulation().placement();
     for (const Vec3& x : world.simulation().fluid().state().position) {
-      const Vec3 p = walls.bodyState(1).pose.toBody(x);
-      const double to_plate =
-          walls.body(2).shape->signedDistance(walls.bodyState(2).pose.toBody(x));
+      const Vec3 p = at[1].pose.toBody(x);
+      const double to_plate = walls.body(2).shape->signedDistance(at[2].pose.toBody(x));
       const bool in = std::abs(p.x()) < half.x() && std::abs(p.z()) < half.z() &&
                       std::abs(p.y() - half.y()) < kRadius && to_plate < kRadius;
       between += in;
