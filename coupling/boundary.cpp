@@ -246,6 +246,25 @@ std::size_t Boundaries::sampleCount() const {
   return total;
 }
 
+void Boundaries::bodySamples(std::size_t b, std::vector<Vec3>& position,
+                             std::vector<Vec3>& normal) const {
+  position.clear();
+  normal.clear();
+  const Body& body = bodies_[b];
+  if (body.moving >= 0) {
+    const SampleSet& set = moving_[body.moving].samples;
+    position = set.position;
+    normal = set.normal;
+    return;
+  }
+  const Pose& pose = body.start.pose;
+  for (std::size_t k = 0; k < static_.position.size(); ++k) {
+    if (static_.body[k] != b) continue;
+    position.push_back(pose.toBody(static_.position[k]));
+    normal.push_back(pose.orientation.conjugate() * static_.normal[k]);
+  }
+}
+
 void Boundaries::worldSamples(const BodyPlacement& at, std::vector<Vec3>& position,
                               std::vector<Vec3>& normal, std::vector<double>& volume,
                               std::vector<std::uint32_t>& body) const {

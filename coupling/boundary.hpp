@@ -102,6 +102,9 @@ class Boundaries {
   /// Largest distance of a body's samples from its origin (m): bounds surface speeds.
   double bodyExtent(std::size_t b) const { return bodies_[b].extent; }
 
+  /// Body `b`'s samples in its own frame (origin = centre of mass): a moving body's as
+  /// they are kept, a static body's from the world at its fixed pose. Allocates.
+  void bodySamples(std::size_t b, std::vector<Vec3>& position, std::vector<Vec3>& normal) const;
   /// World positions, normals and volumes of all samples (static ones in cell order,
   /// then each moving body's at its pose in `at`). For output and tests; allocates.
   void worldSamples(const BodyPlacement& at, std::vector<Vec3>& position, std::vector<Vec3>& normal,

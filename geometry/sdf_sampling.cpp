@@ -279,6 +279,93 @@ int nearestSite(const PointGrid& grid, const std::vector<Vec3>& sites,
 
 }  // namespace
 
+namespace {
+
+/// Sorts the candidates by grid cell (cell size = spacing, stable) for the nearest-site
+/// searches; returns where each cell's group starts (candidates [start[g], start[g + 1])).
+std::vector<std::size_t> groupByCell(std::vector<Candidate>& candidates, double spacing) {
+  const PointGrid cells(spacing);
+  std::vector<std::uint64_t> cell_key(candidates.size());
+  for (std::size_t i = 0; i < candidates.size(); ++i)
+    cell_key[i] = cells.keyOf(candidates[i].x());
+  std::vector<std::size_t> order(candidates.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return cell_key[a] < cell_key[b]; });
+  std::vector<Candidate> sorted(candidates.size());
+  std::vector<std::uint64_t> sorted_key(candidates.size());
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    sorted[k] = candidates[order[k]];
+    sorted_key[k] = cell_key[order[k]];
+  }
+  candidates.swap(sorted);
+  std::vector<std::size_t> group_start;
+  for (std::size_t i = 0; i < candidates.size(); ++i)
+    if (i == 0 || sorted_key[i] != sorted_key[i - 1]) group_start.push_back(i);
+  group_start.push_back(candidates.size());
+  return group_start;
+}
+
+/// Lloyd's relaxation of the sites over the candidates (grouped by cell), until no
+/// candidate changes site (a discrete fixed point) or after max_rounds. Ends with each
+/// candidate's `owner` site and each site's `weight` (area, m^2).
+void relaxSites(const Field& field, const std::vector<Candidate>& candidates,
+                const std::vector<std::size_t>& group_start, double spacing, int max_rounds,
+                std::vector<Vec3>& sites, std::vector<Vec3>& normals, std::vector<double>& weight) {
+  const std::size_t n_candidates = candidates.size();
+  const std::int64_t n_groups = static_cast<std::int64_t>(group_start.size()) - 1;
+  std::vector<int> owner(n_candidates, -1), previous;
+  PointGrid grid(spacing);
+  for (int round = 0; round <= max_rounds; ++round) {
+    grid.clear();
+    for (std::size_t s = 0; s < sites.size(); ++s)
+      grid.insert(sites[s], static_cast<int>(s));
+    previous = owner;
+#pragma omp parallel for schedule(dynamic, 16)
+    for (std::int64_t g = 0; g < n_groups; ++g) {
+      // Sites of the 27 cells about this group's cell: every site within one cell size.
+      std::vector<int> near;
+      const Vec3 first = candidates[group_start[g]].x();
+      for (int ring = 0; ring <= 1; ++ring)
+        grid.forRing(first, ring, [&](int s) { near.push_back(s); });
+      std::sort(near.begin(), near.end());
+      for (std::size_t i = group_start[g]; i < group_start[g + 1]; ++i) {
+        const Candidate& c = candidates[i];
+        int best = -1;
+        double best_sq = spacing * spacing;  // beyond a cell size: search ring by ring
+        for (const int s : near) {
+          if (normals[s].dot(c.n()) <= kSameSide) continue;
+          const double d_sq = (sites[s] - c.x()).squaredNorm();
+          if (d_sq < best_sq) {
+            best_sq = d_sq;
+            best = s;
+          }
+        }
+        owner[i] = best >= 0 ? best : nearestSite(grid, sites, normals, c.x(), c.n());
+      }
+    }
+
+    weight.assign(sites.size(), 0.0);
+    std::vector<Vec3> centroid(sites.size(), Vec3::Zero());
+    for (std::size_t i = 0; i < n_candidates; ++i) {
+      if (owner[i] < 0) continue;
+      weight[owner[i]] += candidates[i].w;
+      centroid[owner[i]] += candidates[i].w * candidates[i].x();
+    }
+    if (round == max_rounds || owner == previous) break;
+    const std::int64_t n_sites = static_cast<std::int64_t>(sites.size());
+#pragma omp parallel for schedule(static)
+    for (std::int64_t s = 0; s < n_sites; ++s) {
+      if (!(weight[s] > 0.0)) continue;
+      sites[s] = field.project(centroid[s] / weight[s]);
+      const Vec3 g = field.gradient(sites[s]);
+      if (!g.isZero()) normals[s] = g;
+    }
+  }
+}
+
+}  // namespace
+
 void sampleSurfaceBySdf(const Shape& shape, double spacing, double radius, SurfaceSamples& out) {
   checkSampling(spacing, radius);
   Aabb box = shape.bounds(Aabb());
@@ -289,31 +376,10 @@ void sampleSurfaceBySdf(const Shape& shape, double spacing, double radius, Surfa
   box.min.array() -= spacing;
   box.max.array() += spacing;
 
-  // 1. Candidates, grouped by grid cell (cell size = spacing) for the nearest-site searches.
+  // 1. Candidates, grouped by grid cell for the nearest-site searches.
   std::vector<Candidate> candidates = latticeCrossings(field, box, spacing / kLatticeDivisions);
   if (candidates.empty()) return;
-  const PointGrid cells(spacing);
-  std::vector<std::uint64_t> cell_key(candidates.size());
-  for (std::size_t i = 0; i < candidates.size(); ++i)
-    cell_key[i] = cells.keyOf(candidates[i].x());
-  {
-    std::vector<std::size_t> order(candidates.size());
-    std::iota(order.begin(), order.end(), std::size_t{0});
-    std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t a, std::size_t b) { return cell_key[a] < cell_key[b]; });
-    std::vector<Candidate> sorted(candidates.size());
-    std::vector<std::uint64_t> sorted_key(candidates.size());
-    for (std::size_t k = 0; k < order.size(); ++k) {
-      sorted[k] = candidates[order[k]];
-      sorted_key[k] = cell_key[order[k]];
-    }
-    candidates.swap(sorted);
-    cell_key.swap(sorted_key);
-  }
-  std::vector<std::size_t> group_start;  // candidates [group_start[g], group_start[g + 1])
-  for (std::size_t i = 0; i < candidates.size(); ++i)
-    if (i == 0 || cell_key[i] != cell_key[i - 1]) group_start.push_back(i);
-  group_start.push_back(candidates.size());
+  const std::vector<std::size_t> group_start = groupByCell(candidates, spacing);
 
   // 2. Seeds.
   double area = 0.0;  // m^2
@@ -324,62 +390,9 @@ void sampleSurfaceBySdf(const Shape& shape, double spacing, double radius, Surfa
   std::vector<Vec3> normals;
   std::vector<Vec3> sites = poissonSeeds(candidates, spacing, target, normals);
 
-  // 3. Lloyd rounds, until no candidate changes site (a discrete fixed point).  Ends with
-  // `owner` and `weight` of the final sites.
-  const std::size_t n_candidates = candidates.size();
-  const std::int64_t n_groups = static_cast<std::int64_t>(group_start.size()) - 1;
-  std::vector<int> owner(n_candidates, -1), previous;
+  // 3. Lloyd rounds.
   std::vector<double> weight;
-  PointGrid grid(spacing);
-  const auto relax = [&](int max_rounds) {
-    for (int round = 0; round <= max_rounds; ++round) {
-      grid.clear();
-      for (std::size_t s = 0; s < sites.size(); ++s)
-        grid.insert(sites[s], static_cast<int>(s));
-      previous = owner;
-#pragma omp parallel for schedule(dynamic, 16)
-      for (std::int64_t g = 0; g < n_groups; ++g) {
-        // Sites of the 27 cells about this group's cell: every site within one cell size.
-        std::vector<int> near;
-        const Vec3 first = candidates[group_start[g]].x();
-        for (int ring = 0; ring <= 1; ++ring)
-          grid.forRing(first, ring, [&](int s) { near.push_back(s); });
-        std::sort(near.begin(), near.end());
-        for (std::size_t i = group_start[g]; i < group_start[g + 1]; ++i) {
-          const Candidate& c = candidates[i];
-          int best = -1;
-          double best_sq = spacing * spacing;  // beyond a cell size: search ring by ring
-          for (const int s : near) {
-            if (normals[s].dot(c.n()) <= kSameSide) continue;
-            const double d_sq = (sites[s] - c.x()).squaredNorm();
-            if (d_sq < best_sq) {
-              best_sq = d_sq;
-              best = s;
-            }
-          }
-          owner[i] = best >= 0 ? best : nearestSite(grid, sites, normals, c.x(), c.n());
-        }
-      }
-
-      weight.assign(sites.size(), 0.0);
-      std::vector<Vec3> centroid(sites.size(), Vec3::Zero());
-      for (std::size_t i = 0; i < n_candidates; ++i) {
-        if (owner[i] < 0) continue;
-        weight[owner[i]] += candidates[i].w;
-        centroid[owner[i]] += candidates[i].w * candidates[i].x();
-      }
-      if (round == max_rounds || owner == previous) break;
-      const std::int64_t n_sites = static_cast<std::int64_t>(sites.size());
-#pragma omp parallel for schedule(static)
-      for (std::int64_t s = 0; s < n_sites; ++s) {
-        if (!(weight[s] > 0.0)) continue;
-        sites[s] = field.project(centroid[s] / weight[s]);
-        const Vec3 g = field.gradient(sites[s]);
-        if (!g.isZero()) normals[s] = g;
-      }
-    }
-  };
-  relax(kMaxLloydRounds);
+  relaxSites(field, candidates, group_start, spacing, kMaxLloydRounds, sites, normals, weight);
 
   for (std::size_t s = 0; s < sites.size(); ++s) {
     if (!(weight[s] > 0.0)) continue;  // an empty cluster stands for no surface

@@ -48,6 +48,14 @@ void writeCheckpoint(const std::string& path, const SimulationState& s,
     w.writeAttribute(root, "resolution", info.resolution);
     w.writeAttribute(root, "checkpoint_every", info.checkpoint_every);
     w.writeAttribute(root, "frames", info.frames);
+    if (info.output.frames() > 0) {
+      const Handle out = w.createGroup(root, "output");
+      const OutputIndex& o = info.output;
+      w.writeDataset(out.get(), "frame_address", H5T_NATIVE_UINT64, o.frame_address.data(),
+                     o.frame_address.size(), 1);
+      w.writeDataset(out.get(), "body_rows", H5T_NATIVE_DOUBLE, o.body_rows.data(),
+                     o.body_rows.size() / OutputIndex::kBodyRow, OutputIndex::kBodyRow);
+    }
 
     const Handle g = w.createGroup(root, "state");
     const hid_t group = g.get();
@@ -101,6 +109,15 @@ SimulationState readCheckpoint(const std::string& path, CheckpointInfo* info) {
     info->resolution = r.readAttribute<double>(root, "resolution", H5T_NATIVE_DOUBLE);
     info->checkpoint_every = r.readAttribute<double>(root, "checkpoint_every", H5T_NATIVE_DOUBLE);
     info->frames = r.readAttribute<std::uint64_t>(root, "frames", H5T_NATIVE_UINT64);
+    info->output = OutputIndex{};
+    if (H5Lexists(root, "output", H5P_DEFAULT) > 0) {
+      const Handle out = r.openGroup(root, "output");
+      const std::vector<std::uint64_t> address =
+          r.readDataset<std::uint64_t>(out.get(), "frame_address", H5T_NATIVE_UINT64, 1);
+      info->output.frame_address = address;
+      info->output.body_rows =
+          r.readDataset<double>(out.get(), "body_rows", H5T_NATIVE_DOUBLE, OutputIndex::kBodyRow);
+    }
   }
   const Handle g = r.openGroup(root, "state");
   const hid_t group = g.get();

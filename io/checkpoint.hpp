@@ -13,12 +13,17 @@
 //                velocity, acceleration (n x 3), density, pressure, kinematic_viscosity,
 //                id (n) in the simulation's slot order, wrenches (bodies x 6: force,
 //                torque), rigid (the rigid-body integrator's numbers)
+//   /output      (`wake run`'s checkpoints) datasets frame_address (frames, uint64: each
+//                output frame group's address in <scene>.h5.partial) and body_rows
+//                (frames * bodies x 14): the OutputIndex the resumed run rebuilds its
+//                output from (io/output.hpp)
 //
 // The file is written as DIR/checkpoint.h5.tmp, synced to disk and renamed over the last
 // one, so a run killed at any moment leaves the previous checkpoint whole.
 #pragma once
 
 #include "coupling/simulation.hpp"
+#include "io/output.hpp"
 
 #include <cstdint>
 #include <string>
@@ -33,6 +38,7 @@ struct CheckpointInfo {
   double resolution = 1;        ///< --resolution factor
   double checkpoint_every = 0;  ///< s of simulated time between checkpoints
   std::uint64_t frames = 0;     ///< output frames complete when the checkpoint was written
+  OutputIndex output;           ///< those frames (empty for a checkpoint of the C++ API)
 };
 
 /// Writes `state` and `info` to `path` atomically (path.tmp, fsync, rename). Throws

@@ -77,6 +77,7 @@ struct FrameWriter::Impl : hdf5::Writer {
   Handle file, frames_group, bodies_group;
   std::vector<BodySeries> bodies;  // in the order of sim.bodyStates()
   std::vector<FrameEntry> entries;
+  OutputIndex index;
   bool finished = false;
 
   /// The output's file names in `out_dir` for the scene `name` (final and .partial).
@@ -89,10 +90,9 @@ struct FrameWriter::Impl : hdf5::Writer {
     xdmf_partial = xdmf_final + ".partial";
   }
 
-  /// Creates `file_path` with the root attributes, the groups and the bodies' empty series
-  /// and surfaces: computed from `sim`, or (resuming, old >= 0) copied from the file `old`.
-  void createFile(const std::string& file_path, const SceneFile& scene, const Simulation& sim,
-                  hid_t old) {
+  /// Creates `file_path` with the root attributes, the groups, the bodies' empty series
+  /// and their surfaces.
+  void createFile(const std::string& file_path, const SceneFile& scene, const Simulation& sim) {
     path = file_path;
     file = create(H5Fcreate(file_path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose,
                   "create the file");
@@ -119,20 +119,31 @@ struct FrameWriter::Impl : hdf5::Writer {
       s.angular_velocity = createSeries(s.group.get(), "angular_velocity", 3);
       bodies.push_back(std::move(s));
     }
-    if (old < 0) {
-      writeSurfaces(sim);
-    } else {
-      const Boundaries& boundaries = sim.boundaries();
-      for (std::size_t b = 0; b < boundaries.bodyCount() && b < bodies.size(); ++b) {
-        for (const char* set : {"surface_points", "surface_normals"}) {
-          const std::string name = "bodies/" + boundaries.body(b).name + "/" + set;
-          check(H5Ocopy(old, name.c_str(), root, name.c_str(), H5P_DEFAULT, H5P_DEFAULT),
-                "copy " + name);
-        }
-        writeAttribute(bodies[b].group.get(), "kind", kindName(boundaries.body(b).kind));
-      }
-    }
+    writeSurfaces(sim);
     check(H5Fflush(root, H5F_SCOPE_GLOBAL), "flush the file");
+  }
+
+  /// Appends frame k's body rows (bodies x OutputIndex::kBodyRow numbers) to the body
+  /// series and to the index.
+  void appendBodyRows(std::size_t k, const double* rows) {
+    for (std::size_t b = 0; b < bodies.size(); ++b) {
+      const double* r = rows + b * OutputIndex::kBodyRow;
+      const BodySeries& s = bodies[b];
+      appendRow(s.time, k, r, 1);
+      appendRow(s.position, k, r + 1, 3);
+      appendRow(s.orientation, k, r + 4, 4);
+      appendRow(s.linear_velocity, k, r + 8, 3);
+      appendRow(s.angular_velocity, k, r + 11, 3);
+    }
+    index.body_rows.insert(index.body_rows.end(), rows,
+                           rows + bodies.size() * OutputIndex::kBodyRow);
+  }
+
+  /// The file address of an object (what H5Oopen_by_addr opens).
+  std::uint64_t addressOf(hid_t object) const {
+    H5O_info_t info;
+    check(H5Oget_info2(object, &info, H5O_INFO_BASIC), "get an object's address");
+    return static_cast<std::uint64_t>(info.addr);
   }
 
   static std::string kindName(BodyKind kind) {
@@ -142,31 +153,16 @@ struct FrameWriter::Impl : hdf5::Writer {
   }
 
   /// Each body's boundary samples in its body frame (surface_points, surface_normals) and
-  /// its kind, from the samples at the current pose. Groups in the order of sim.bodyStates().
+  /// its kind: the same at any time of the run. Groups in the order of sim.bodyStates().
   void writeSurfaces(const Simulation& sim) const {
     const Boundaries& boundaries = sim.boundaries();
-    std::vector<Vec3> position, normal;
-    std::vector<double> volume;
-    std::vector<std::uint32_t> owner;
-    const BodyPlacement at = sim.placement();
-    boundaries.worldSamples(at, position, normal, volume, owner);
-    std::vector<std::vector<Vec3>> points(boundaries.bodyCount()), normals(boundaries.bodyCount());
-    for (std::size_t b = 0; b < boundaries.bodyCount(); ++b) {
-      points[b].reserve(boundaries.bodySampleCount(b));
-      normals[b].reserve(boundaries.bodySampleCount(b));
-    }
-    for (std::size_t k = 0; k < position.size(); ++k) {
-      const std::uint32_t b = owner[k];
-      if (b >= boundaries.bodyCount()) continue;
-      const Pose& pose = at[b].pose;
-      points[b].push_back(pose.toBody(position[k]));
-      normals[b].push_back(pose.orientation.conjugate() * normal[k]);
-    }
+    std::vector<Vec3> points, normals;
     for (std::size_t b = 0; b < boundaries.bodyCount() && b < bodies.size(); ++b) {
+      boundaries.bodySamples(b, points, normals);
       const hid_t group = bodies[b].group.get();
-      const hsize_t m = points[b].size();
-      writeDataset(group, "surface_points", H5T_NATIVE_DOUBLE, points[b].data(), m, 3);
-      writeDataset(group, "surface_normals", H5T_NATIVE_DOUBLE, normals[b].data(), m, 3);
+      const hsize_t m = points.size();
+      writeDataset(group, "surface_points", H5T_NATIVE_DOUBLE, points.data(), m, 3);
+      writeDataset(group, "surface_normals", H5T_NATIVE_DOUBLE, normals.data(), m, 3);
       writeAttribute(group, "kind", kindName(boundaries.body(b).kind));
     }
   }
@@ -221,19 +217,25 @@ FrameWriter::FrameWriter(const std::string& out_dir, const SceneFile& scene, con
   Impl& d = *impl_;
   d.setNames(out_dir, scene.name);
 
-  d.createFile(d.h5_partial, scene, sim, -1);
+  d.createFile(d.h5_partial, scene, sim);
 }
 
 FrameWriter::FrameWriter(const std::string& out_dir, const SceneFile& scene, const Simulation& sim,
-                         std::size_t frames)
+                         const OutputIndex& index)
     : impl_(std::make_unique<Impl>()) {
   const QuietHdf5Errors quiet;
   Impl& d = *impl_;
   d.setNames(out_dir, scene.name);
-  // A run killed while it wrote a frame can leave that frame's HDF5 metadata half on disk
-  // (HDF5 has no journal): the file is never written again in place. A new file takes the
-  // first `frames` frames and body series rows of the old one (written and synced before
-  // the checkpoint), and replaces it.
+  // The old file is never written again, nor trusted beyond the frames the checkpoint
+  // counts, each opened by its address (HDF5 has no journal: a run killed while it wrote
+  // can leave the /frames group's index, or a body series, torn). A new file takes them
+  // and replaces it.
+  const std::size_t frames = index.frames();
+  const std::size_t nb = sim.bodyStates().size();
+  if (index.body_rows.size() != frames * nb * OutputIndex::kBodyRow)
+    throw std::runtime_error("cannot resume: the checkpoint's body rows do not match its " +
+                             std::to_string(frames) + " frames and " + std::to_string(nb) +
+                             " bodies");
   if (::access(d.h5_partial.c_str(), R_OK) != 0)
     throw std::runtime_error("cannot resume: " + d.h5_partial + " is missing");
   hdf5::Writer old_file;
@@ -241,40 +243,24 @@ FrameWriter::FrameWriter(const std::string& out_dir, const SceneFile& scene, con
   const Handle old = old_file.create(H5Fopen(d.h5_partial.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT),
                                      H5Fclose, "open the file");
   const std::string fresh = d.h5_partial + ".resume";
-  d.createFile(fresh, scene, sim, old.get());
-  const Handle old_frames = old_file.openGroup(old.get(), "frames");
+  d.createFile(fresh, scene, sim);
   for (std::size_t k = 0; k < frames; ++k) {
     const std::string name = frameName(k);
-    if (H5Lexists(old_frames.get(), name.c_str(), H5P_DEFAULT) <= 0)
+    const Handle frame(H5Oopen_by_addr(old.get(), static_cast<haddr_t>(index.frame_address[k])),
+                       H5Oclose);
+    if (!frame.valid())
       throw std::runtime_error("cannot resume: " + d.h5_partial + " lacks frame " + name +
                                " of the " + std::to_string(frames) + " the checkpoint counts");
-    old_file.check(H5Ocopy(old_frames.get(), name.c_str(), d.frames_group.get(), name.c_str(),
-                           H5P_DEFAULT, H5P_DEFAULT),
-                   "copy frame " + name);
+    old_file.check(
+        H5Ocopy(frame.get(), ".", d.frames_group.get(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT),
+        "copy frame " + name);
     const Handle group = d.openGroup(d.frames_group.get(), name);
     const double time = d.readAttribute<double>(group.get(), "time", H5T_NATIVE_DOUBLE);
     const std::vector<std::uint32_t> id =
         d.readDataset<std::uint32_t>(group.get(), "id", H5T_NATIVE_UINT32, 1);
     d.entries.push_back(FrameEntry{k, time, id.size()});
-  }
-  const std::vector<BodyState> states = sim.bodyStates();
-  for (std::size_t b = 0; b < states.size(); ++b) {
-    const Handle group = old_file.openGroup(old.get(), "bodies/" + states[b].name);
-    const BodySeries& s = d.bodies[b];
-    auto copyRows = [&](const char* name, const Handle& to, hsize_t cols) {
-      const std::vector<double> rows =
-          old_file.readDataset<double>(group.get(), name, H5T_NATIVE_DOUBLE, cols);
-      if (rows.size() < frames * cols)
-        throw std::runtime_error("cannot resume: " + d.h5_partial + " has fewer rows of " +
-                                 states[b].name + "/" + name + " than frames");
-      for (std::size_t k = 0; k < frames; ++k)
-        d.appendRow(to, k, rows.data() + k * cols, cols);
-    };
-    copyRows("time", s.time, 1);
-    copyRows("position", s.position, 3);
-    copyRows("orientation", s.orientation, 4);
-    copyRows("linear_velocity", s.linear_velocity, 3);
-    copyRows("angular_velocity", s.angular_velocity, 3);
+    d.appendBodyRows(k, &index.body_rows[k * nb * OutputIndex::kBodyRow]);
+    d.index.frame_address.push_back(d.addressOf(group.get()));
   }
   d.check(H5Fflush(d.file.get(), H5F_SCOPE_GLOBAL), "flush the file");
   renameFile(fresh, d.h5_partial);  // the open file keeps its data under the new name
@@ -315,18 +301,27 @@ void FrameWriter::writeFrame(const Simulation& sim, const FluidSnapshot& fluid) 
   const std::vector<BodyState> states = sim.bodyStates();
   if (states.size() != d.bodies.size())
     throw std::logic_error("FrameWriter: the number of bodies changed during the run");
-  for (std::size_t i = 0; i < states.size(); ++i) {
-    const BodyState& b = states[i];
-    const BodySeries& s = d.bodies[i];
-    const std::array<double, 4> xyzw = {b.orientation.x(), b.orientation.y(), b.orientation.z(),
-                                        b.orientation.w()};
-    d.appendRow(s.time, k, &time, 1);
-    d.appendRow(s.position, k, b.position.data(), 3);
-    d.appendRow(s.orientation, k, xyzw.data(), 4);
-    d.appendRow(s.linear_velocity, k, b.linear_velocity.data(), 3);
-    d.appendRow(s.angular_velocity, k, b.angular_velocity.data(), 3);
+  std::vector<double> rows;
+  for (const BodyState& b : states) {
+    const std::array<double, OutputIndex::kBodyRow> row = {time,
+                                                           b.position.x(),
+                                                           b.position.y(),
+                                                           b.position.z(),
+                                                           b.orientation.x(),
+                                                           b.orientation.y(),
+                                                           b.orientation.z(),
+                                                           b.orientation.w(),
+                                                           b.linear_velocity.x(),
+                                                           b.linear_velocity.y(),
+                                                           b.linear_velocity.z(),
+                                                           b.angular_velocity.x(),
+                                                           b.angular_velocity.y(),
+                                                           b.angular_velocity.z()};
+    rows.insert(rows.end(), row.begin(), row.end());
   }
+  d.appendBodyRows(k, rows.data());
   d.check(H5Fflush(d.file.get(), H5F_SCOPE_GLOBAL), "flush the file");
+  d.index.frame_address.push_back(d.addressOf(group.get()));
 
   d.entries.push_back(FrameEntry{k, time, static_cast<std::size_t>(n)});
   writeFileAtomically(d.xdmf_partial, d.xdmf(fileName(d.h5_partial)));
@@ -348,6 +343,9 @@ void FrameWriter::finish() {
 
 std::size_t FrameWriter::frames() const {
   return impl_->entries.size();
+}
+const OutputIndex& FrameWriter::index() const {
+  return impl_->index;
 }
 const std::string& FrameWriter::h5Path() const {
   return impl_->h5_final;

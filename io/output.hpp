@@ -25,25 +25,41 @@
 
 #include "coupling/simulation.hpp"
 
+#include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace wake {
 
 struct SceneFile;
+
+/// What a checkpoint keeps of the output written so far (io/checkpoint.hpp), so that a
+/// resumed run rebuilds its HDF5 file from the frames' own objects alone. HDF5 has no
+/// journal: a run killed while it wrote can leave the file's index of frames (the
+/// /frames group) and its extendible body series torn, but never a frame group that was
+/// complete on disk at the checkpoint, which is found by its address.
+struct OutputIndex {
+  std::vector<std::uint64_t> frame_address;  ///< (frames) file address of /frames/NNNNNN
+  /// (frames x bodies x kBodyRow) each frame's body rows: time, position (3), orientation
+  /// (x y z w), linear velocity (3), angular velocity (3)
+  std::vector<double> body_rows;
+  static constexpr std::size_t kBodyRow = 14;
+  std::size_t frames() const { return frame_address.size(); }
+};
 
 class FrameWriter {
  public:
   /// Creates DIR/<scene.name>.h5.partial (DIR must exist) and writes the root attributes.
   /// Throws std::runtime_error naming the file when it cannot be written.
   FrameWriter(const std::string& out_dir, const SceneFile& scene, const Simulation& sim);
-  /// Continues the output of a stopped run: copies the first `frames` frames (and body
-  /// series rows, and the bodies' surfaces) of DIR/<scene.name>.h5.partial into a new file
-  /// that replaces it (a run killed while writing a frame may leave that frame's HDF5
-  /// metadata half written: the old file is only read), and rewrites the XDMF index.
-  /// Throws std::runtime_error naming the file when it is missing or holds fewer frames.
+  /// Continues the output of a stopped run: a new file with the root attributes and the
+  /// bodies' surfaces written again, the frames of `index` copied from
+  /// DIR/<scene.name>.h5.partial by their addresses and the body series rows from `index`,
+  /// replaces it (the old file is only read), and the XDMF index is rewritten. Throws
+  /// std::runtime_error naming the file when it is missing or a frame cannot be read.
   FrameWriter(const std::string& out_dir, const SceneFile& scene, const Simulation& sim,
-              std::size_t frames);
+              const OutputIndex& index);
   /// Closes the file; without finish() the .partial files stay as they are.
   ~FrameWriter();
   FrameWriter(const FrameWriter&) = delete;
@@ -58,6 +74,8 @@ class FrameWriter {
   void finish();
 
   std::size_t frames() const;
+  /// The frames written so far, for a checkpoint (call after sync()).
+  const OutputIndex& index() const;
   const std::string& h5Path() const;    ///< final name, DIR/<name>.h5
   const std::string& xdmfPath() const;  ///< final name, DIR/<name>.xdmf
 

@@ -123,6 +123,7 @@ namespace {
 /// Where a run starts: from t = 0, or from a checkpoint with `frames` frames written.
 struct Start {
   const SimulationState* state = nullptr;
+  const OutputIndex* output = nullptr;  ///< resuming: the frames written before
   std::size_t frames = 0;
   double checkpoint_every = 0;
 };
@@ -136,26 +137,117 @@ double nextCheckpoint(double t, double every) {
   return every * (std::floor(t / every * (1.0 + 1e-12)) + 1.0);
 }
 
-RunResult run(const SceneFile& scene, const RunOptions& options, const Start& from) {
-  const Clock::time_point start = Clock::now();
-  if (options.out_dir.empty()) throw SceneError("--out: an output folder is required");
-  if (!std::isfinite(from.checkpoint_every) || from.checkpoint_every < 0)
-    throw SceneError("--checkpoint-every: must be a finite number >= 0");
-
-  // Everything that can reject the input happens before the output folder is touched.
-  std::unique_ptr<SceneWorld> world;
-  Simulation* sim = nullptr;
+/// The scene's world, at its start or at the restored state. Everything that can reject
+/// the input happens here, before the output folder is touched.
+std::unique_ptr<SceneWorld> buildWorld(const SceneFile& scene, const Start& from) {
   try {
-    world = std::make_unique<SceneWorld>(scene.sim, scene.bodies);
+    auto world = std::make_unique<SceneWorld>(scene.sim, scene.bodies);
     world->coupled().start();
-    sim = &world->coupled().simulation();
-    if (from.state) sim->restoreState(*from.state);
+    if (from.state) world->coupled().simulation().restoreState(*from.state);
+    return world;
   } catch (const std::invalid_argument& e) {
     throw SceneError(scene.path + ": " + e.what());
   } catch (const std::bad_alloc&) {
     throw SceneError(scene.path + ": fluid.particle_radius: not enough memory for " +
                      "this many particles; use a larger particle_radius or smaller blocks");
   }
+}
+
+/// The run's first progress line: what is simulated, on how many threads.
+std::string startLine(const SceneFile& scene, const Simulation& sim, int threads,
+                      std::size_t last_frame, const Start& from) {
+  std::ostringstream m;
+  m << "scene " << scene.name << ": " << sim.fluidParticles() << " fluid + "
+    << sim.boundaryParticles() << " boundary particles, c = " << sim.fluid().params().speed_of_sound
+    << " m/s, " << threads << " thread" << (threads == 1 ? "" : "s") << ", " << last_frame + 1
+    << " frames";
+  if (sim.removedAtStart() > 0)
+    m << " (" << sim.removedAtStart() << " fluid particles inside bodies removed)";
+  if (from.state) m << "; resumed at t = " << sim.time() << " s after frame " << from.frames - 1;
+  return m.str();
+}
+
+/// The run's output files: new ones, or (resuming) the stopped run's, trimmed to the
+/// checkpoint's frames.
+struct Writers {
+  std::unique_ptr<FrameWriter> frames;
+  std::unique_ptr<SeriesWriter> series;
+};
+
+Writers openWriters(const SceneFile& scene, const RunOptions& options, const Simulation& sim,
+                    const Start& from) {
+  Writers w;
+  try {
+    if (from.state) {
+      w.frames = std::make_unique<FrameWriter>(options.out_dir, scene, sim, *from.output);
+      w.series = std::make_unique<SeriesWriter>(options.out_dir, sim, from.frames);
+    } else {
+      w.frames = std::make_unique<FrameWriter>(options.out_dir, scene, sim);
+      w.series = std::make_unique<SeriesWriter>(options.out_dir, sim);
+    }
+  } catch (const std::exception& e) {
+    throw RunError(e.what());
+  }
+  return w;
+}
+
+/// Advances the world frame by frame from the start's frame to the last, writing every
+/// frame and, every checkpoint_every seconds, the checkpoint (after the frames it counts
+/// are on disk). A stopped run becomes one RunError naming where and why.
+void writeFrames(SceneWorld& world, const SceneFile& scene, const Start& from, Writers& out,
+                 Progress& progress, const std::string& checkpoint, std::size_t last_frame) {
+  Simulation& sim = world.coupled().simulation();
+  CheckpointInfo info;
+  info.scene_path = scene.path;
+  info.scene_text = scene.text;
+  info.end_time = scene.end_time;
+  info.resolution = scene.resolution;
+  info.checkpoint_every = from.checkpoint_every;
+  double next_checkpoint = from.checkpoint_every > 0
+                               ? nextCheckpoint(sim.time(), from.checkpoint_every)
+                               : std::numeric_limits<double>::infinity();
+  FluidSnapshot fluid;
+  try {
+    for (std::size_t k = from.frames; k <= last_frame; ++k) {
+      if (k > 0) world.coupled().advanceTo(frameTime(scene, k));
+      sim.snapshot(fluid);
+      out.frames->writeFrame(sim, fluid);
+      out.series->writeFrame(sim, k == 0);
+      sim.resetWindow();
+      progress.frame(k, sim);
+      if (sim.time() >= next_checkpoint && k < last_frame) {
+        out.frames->sync();
+        out.series->sync();
+        info.frames = k + 1;
+        info.output = out.frames->index();
+        writeCheckpoint(checkpoint, sim.saveState(), info);
+        next_checkpoint = nextCheckpoint(sim.time(), from.checkpoint_every);
+      }
+    }
+    out.frames->finish();
+    out.series->finish();
+  } catch (const HealthError& e) {
+    // The simulation checked itself after every step and says what to change.
+    progress.abandon();
+    throw RunError(scene.path + ": the run stopped at " + e.what() + "; the " +
+                   std::to_string(out.frames->frames()) + " frames before are in " +
+                   out.frames->h5Path() + ".partial");
+  } catch (const std::exception& e) {
+    progress.abandon();
+    std::ostringstream m;
+    m << scene.path << ": run stopped at t=" << sim.time() << " s (step " << sim.steps()
+      << "): " << e.what();
+    throw RunError(m.str());
+  }
+}
+
+RunResult run(const SceneFile& scene, const RunOptions& options, const Start& from) {
+  const Clock::time_point start = Clock::now();
+  if (options.out_dir.empty()) throw SceneError("--out: an output folder is required");
+  if (!std::isfinite(from.checkpoint_every) || from.checkpoint_every < 0)
+    throw SceneError("--checkpoint-every: must be a finite number >= 0");
+  const std::unique_ptr<SceneWorld> world = buildWorld(scene, from);
+  const Simulation& sim = world->coupled().simulation();
   prepareOutputFolder(options.out_dir);
   const std::string checkpoint = checkpointPath(options.out_dir);
   if (!from.state) std::remove(checkpoint.c_str());  // an earlier run's: not this run's
@@ -164,84 +256,19 @@ RunResult run(const SceneFile& scene, const RunOptions& options, const Start& fr
   Progress progress(options, last_frame, scene.end_time);
   progress.startAt(from.frames);
   const int threads = omp_get_max_threads();
-  {
-    std::ostringstream m;
-    m << "scene " << scene.name << ": " << sim->fluidParticles() << " fluid + "
-      << sim->boundaryParticles()
-      << " boundary particles, c = " << sim->fluid().params().speed_of_sound << " m/s, " << threads
-      << " thread" << (threads == 1 ? "" : "s") << ", " << last_frame + 1 << " frames";
-    if (sim->removedAtStart() > 0)
-      m << " (" << sim->removedAtStart() << " fluid particles inside bodies removed)";
-    if (from.state) m << "; resumed at t = " << sim->time() << " s after frame " << from.frames - 1;
-    progress.message(m.str());
-  }
-
-  std::unique_ptr<FrameWriter> writer;
-  std::unique_ptr<SeriesWriter> series;
-  try {
-    if (from.state) {
-      writer = std::make_unique<FrameWriter>(options.out_dir, scene, *sim, from.frames);
-      series = std::make_unique<SeriesWriter>(options.out_dir, *sim, from.frames);
-    } else {
-      writer = std::make_unique<FrameWriter>(options.out_dir, scene, *sim);
-      series = std::make_unique<SeriesWriter>(options.out_dir, *sim);
-    }
-  } catch (const std::exception& e) {
-    throw RunError(e.what());
-  }
-  CheckpointInfo info;
-  info.scene_path = scene.path;
-  info.scene_text = scene.text;
-  info.end_time = scene.end_time;
-  info.resolution = scene.resolution;
-  info.checkpoint_every = from.checkpoint_every;
-  double next_checkpoint = from.checkpoint_every > 0
-                               ? nextCheckpoint(sim->time(), from.checkpoint_every)
-                               : std::numeric_limits<double>::infinity();
-  FluidSnapshot fluid;
-  try {
-    for (std::size_t k = from.frames; k <= last_frame; ++k) {
-      if (k > 0) world->coupled().advanceTo(frameTime(scene, k));
-      sim->snapshot(fluid);
-      writer->writeFrame(*sim, fluid);
-      series->writeFrame(*sim, k == 0);
-      sim->resetWindow();
-      progress.frame(k, *sim);
-      if (sim->time() >= next_checkpoint && k < last_frame) {
-        // The frames it counts are on disk before it is.
-        writer->sync();
-        series->sync();
-        info.frames = k + 1;
-        writeCheckpoint(checkpoint, sim->saveState(), info);
-        next_checkpoint = nextCheckpoint(sim->time(), from.checkpoint_every);
-      }
-    }
-    writer->finish();
-    series->finish();
-  } catch (const HealthError& e) {
-    // The simulation checked itself after every step and says what to change.
-    progress.abandon();
-    throw RunError(scene.path + ": the run stopped at " + e.what() + "; the " +
-                   std::to_string(writer->frames()) + " frames before are in " + writer->h5Path() +
-                   ".partial");
-  } catch (const std::exception& e) {
-    progress.abandon();
-    std::ostringstream m;
-    m << scene.path << ": run stopped at t=" << sim->time() << " s (step " << sim->steps()
-      << "): " << e.what();
-    throw RunError(m.str());
-  }
+  progress.message(startLine(scene, sim, threads, last_frame, from));
+  Writers out = openWriters(scene, options, sim, from);
+  writeFrames(*world, scene, from, out, progress, checkpoint, last_frame);
 
   RunStats stats;
-  stats.frames = writer->frames();
+  stats.frames = out.frames->frames();
   stats.threads = threads;
-  stats.output = fs::path(writer->h5Path()).filename().string();
+  stats.output = fs::path(out.frames->h5Path()).filename().string();
   stats.wall_seconds = secondsSince(start);
-
   RunResult result;
-  result.summary = makeSummary(scene, *sim, stats);
-  result.h5_path = writer->h5Path();
-  result.xdmf_path = writer->xdmfPath();
+  result.summary = makeSummary(scene, sim, stats);
+  result.h5_path = out.frames->h5Path();
+  result.xdmf_path = out.frames->xdmfPath();
   result.summary_path = options.out_dir + "/summary.json";
   try {
     writeSummary(result.summary_path, result.summary);
@@ -250,7 +277,7 @@ RunResult run(const SceneFile& scene, const RunOptions& options, const Start& fr
   }
   std::remove(checkpoint.c_str());  // the run is complete: nothing to resume
   std::ostringstream m;
-  m << "done: " << stats.frames << " frames, " << sim->steps() << " steps in " << std::fixed
+  m << "done: " << stats.frames << " frames, " << sim.steps() << " steps in " << std::fixed
     << std::setprecision(2) << stats.wall_seconds << " s -> " << result.h5_path;
   progress.message(m.str());
   return result;
@@ -288,6 +315,10 @@ RunResult resumeRun(const RunOptions& options) {
   Start from;
   from.state = &state;
   from.frames = static_cast<std::size_t>(info.frames);
+  if (info.output.frames() != from.frames)
+    throw SceneError("--resume: " + path + " indexes " + std::to_string(info.output.frames()) +
+                     " output frames, not the " + std::to_string(from.frames) + " it counts");
+  from.output = &info.output;
   from.checkpoint_every = info.checkpoint_every;
   return run(scene, options, from);
 }

@@ -2,6 +2,7 @@
 #include "render/render.hpp"
 
 #include "io/hdf5_handle.hpp"
+#include "io/run_file.hpp"
 
 #include "io/scene.hpp"
 
@@ -30,162 +31,6 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using Rgb = std::array<float, 3>;
-
-static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 arrays are read as N x 3 doubles");
-
-// ---------------------------------------------------------------------------------------
-// Reading the run (HDF5 is not thread-safe: every read happens on one thread).
-
-using hdf5::Handle;
-using hdf5::QuietHdf5Errors;
-
-struct BodyData {
-  std::string name, kind;
-  std::vector<Vec3> points, normals;  ///< body frame
-  std::vector<Vec3> position;         ///< per frame
-  std::vector<Quat> orientation;      ///< per frame
-  Pose pose(std::size_t frame) const {
-    Pose p;
-    if (position.empty()) return p;
-    const std::size_t k = std::min(frame, position.size() - 1);
-    p.position = position[k];
-    if (k < orientation.size()) p.orientation = orientation[k];
-    return p;
-  }
-};
-
-struct FrameData {
-  std::size_t index = 0;
-  std::vector<Vec3> position, velocity;
-};
-
-class RunFile {
- public:
-  explicit RunFile(const std::string& path)
-      : path_(path), file_(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose) {
-    if (!file_.valid()) throw SceneError(path + ": cannot open (not an HDF5 file?)");
-  }
-
-  double rootDouble(const char* name, double fallback) const {
-    if (H5Aexists(file_.get(), name) <= 0) return fallback;
-    const Handle attr(H5Aopen(file_.get(), name, H5P_DEFAULT), H5Aclose);
-    double value = fallback;
-    if (!attr.valid() || H5Aread(attr.get(), H5T_NATIVE_DOUBLE, &value) < 0)
-      fail("read attribute " + std::string(name));
-    return value;
-  }
-
-  static std::string stringAttribute(hid_t object, const char* name) {
-    if (H5Aexists(object, name) <= 0) return "";
-    const Handle attr(H5Aopen(object, name, H5P_DEFAULT), H5Aclose);
-    if (!attr.valid()) return "";
-    const Handle type(H5Aget_type(attr.get()), H5Tclose);
-    if (!type.valid() || H5Tget_class(type.get()) != H5T_STRING) return "";
-    if (H5Tis_variable_str(type.get()) > 0) {
-      char* text = nullptr;
-      if (H5Aread(attr.get(), type.get(), &text) < 0 || text == nullptr) return "";
-      std::string out(text);
-      H5free_memory(text);
-      return out;
-    }
-    std::string out(H5Tget_size(type.get()), '\0');
-    if (out.empty() || H5Aread(attr.get(), type.get(), &out[0]) < 0) return "";
-    out.resize(std::strlen(out.c_str()));
-    return out;
-  }
-
-  std::size_t frameCount() const {
-    if (H5Lexists(file_.get(), "frames", H5P_DEFAULT) <= 0) fail("find the group /frames");
-    const Handle group(H5Gopen2(file_.get(), "frames", H5P_DEFAULT), H5Gclose);
-    H5G_info_t info;
-    if (!group.valid() || H5Gget_info(group.get(), &info) < 0) fail("read the group /frames");
-    return static_cast<std::size_t>(info.nlinks);
-  }
-
-  void readFrame(std::size_t k, FrameData& out, bool positions, bool velocities) const {
-    char name[48];
-    std::snprintf(name, sizeof(name), "frames/%06zu", k);
-    const Handle group(H5Gopen2(file_.get(), name, H5P_DEFAULT), H5Gclose);
-    if (!group.valid()) fail(std::string("open /") + name);
-    out.index = k;
-    if (positions) readRows(group.get(), "position", 3, name, out.position);
-    if (velocities) readRows(group.get(), "velocity", 3, name, out.velocity);
-  }
-
-  std::vector<BodyData> readBodies() const {
-    std::vector<BodyData> out;
-    if (H5Lexists(file_.get(), "bodies", H5P_DEFAULT) <= 0) return out;
-    const Handle bodies(H5Gopen2(file_.get(), "bodies", H5P_DEFAULT), H5Gclose);
-    H5G_info_t info;
-    if (!bodies.valid() || H5Gget_info(bodies.get(), &info) < 0) fail("read the group /bodies");
-    for (hsize_t i = 0; i < info.nlinks; ++i) {
-      const ssize_t size = H5Lget_name_by_idx(bodies.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i,
-                                              nullptr, 0, H5P_DEFAULT);
-      if (size < 0) fail("list /bodies");
-      std::string body_name(static_cast<std::size_t>(size) + 1, '\0');
-      H5Lget_name_by_idx(bodies.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, &body_name[0],
-                         body_name.size(), H5P_DEFAULT);
-      body_name.resize(static_cast<std::size_t>(size));
-      const Handle group(H5Gopen2(bodies.get(), body_name.c_str(), H5P_DEFAULT), H5Gclose);
-      if (!group.valid()) fail("open /bodies/" + body_name);
-      BodyData b;
-      b.name = body_name;
-      b.kind = stringAttribute(group.get(), "kind");
-      const std::string where = "bodies/" + body_name;
-      // Files written before surface_points existed have no surfaces: nothing to draw.
-      if (H5Lexists(group.get(), "surface_points", H5P_DEFAULT) > 0 &&
-          H5Lexists(group.get(), "surface_normals", H5P_DEFAULT) > 0) {
-        readRows(group.get(), "surface_points", 3, where, b.points);
-        readRows(group.get(), "surface_normals", 3, where, b.normals);
-        if (b.normals.size() != b.points.size())
-          fail("match /" + where + "/surface_normals to surface_points");
-      }
-      readRows(group.get(), "position", 3, where, b.position);
-      std::vector<double> xyzw;
-      readFlat(group.get(), "orientation", 4, where, xyzw);
-      for (std::size_t f = 0; f + 3 < xyzw.size(); f += 4)
-        b.orientation.push_back(Quat(xyzw[f + 3], xyzw[f], xyzw[f + 1], xyzw[f + 2]).normalized());
-      out.push_back(std::move(b));
-    }
-    return out;
-  }
-
- private:
-  [[noreturn]] void fail(const std::string& what) const {
-    throw SceneError(path_ + ": cannot " + what);
-  }
-
-  /// Reads dataset `name` of rows x cols doubles into `out` (row-major).
-  void readFlat(hid_t group, const char* name, hsize_t cols, const std::string& where,
-                std::vector<double>& out) const {
-    const std::string full = "/" + where + "/" + name;
-    const Handle set(H5Dopen2(group, name, H5P_DEFAULT), H5Dclose);
-    if (!set.valid()) fail("open dataset " + full);
-    const Handle space(H5Dget_space(set.get()), H5Sclose);
-    hsize_t dims[2] = {0, 0};
-    const int rank = space.valid() ? H5Sget_simple_extent_ndims(space.get()) : -1;
-    if (rank < 1 || rank > 2) fail("read dataset " + full + " (unexpected shape)");
-    H5Sget_simple_extent_dims(space.get(), dims, nullptr);
-    if (rank == 2 ? dims[1] != cols : (dims[0] != 0 || cols != 1))
-      fail("read dataset " + full + " (expected " + std::to_string(cols) + " columns)");
-    out.assign(static_cast<std::size_t>(dims[0] * cols), 0.0);
-    if (!out.empty() &&
-        H5Dread(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) < 0)
-      fail("read dataset " + full);
-  }
-
-  void readRows(hid_t group, const char* name, hsize_t cols, const std::string& where,
-                std::vector<Vec3>& out) const {
-    std::vector<double> flat;
-    readFlat(group, name, cols, where, flat);
-    out.resize(flat.size() / 3);
-    for (std::size_t i = 0; i < out.size(); ++i)
-      out[i] = Vec3(flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]);
-  }
-
-  std::string path_;
-  Handle file_;
-};
 
 // ---------------------------------------------------------------------------------------
 // Colours.
@@ -428,16 +273,16 @@ struct Plan {
   double near_depth = 0, far_depth = 1;  ///< depth ramp range
   double section_depth = -1;  ///< fluid nearer than this depth is not drawn; < 0: all drawn
   RenderColor color = RenderColor::Speed;
-  std::vector<BodyData> bodies;
+  std::vector<RunBody> bodies;
   std::vector<Rgb> body_colors;
   std::vector<std::vector<std::uint8_t>> visible;  ///< per static body sample (cut-away)
 };
 
-void renderFrame(const Plan& plan, const FrameData& frame, Image& im) {
+void renderFrame(const Plan& plan, const RunFrame& frame, Image& im) {
   im.clear();
   const RenderCamera& cam = plan.camera;
   for (std::size_t b = 0; b < plan.bodies.size(); ++b) {
-    const BodyData& body = plan.bodies[b];
+    const RunBody& body = plan.bodies[b];
     const Pose pose = body.pose(frame.index);
     const std::vector<std::uint8_t>& visible = plan.visible[b];
     for (std::size_t k = 0; k < body.points.size(); ++k) {
@@ -516,6 +361,216 @@ std::string frameFile(const std::string& out_dir, const std::string& scene, std:
   return (fs::path(out_dir) / (scene + buf)).string();
 }
 
+// ---------------------------------------------------------------------------------------
+// The stages of a render.
+
+void checkOptions(const RenderOptions& o) {
+  if (o.width < 16 || o.width > 8192)
+    throw SceneError("--width: must be in [16, 8192] pixels (got " + std::to_string(o.width) + ")");
+  if (o.height < 16 || o.height > 8192)
+    throw SceneError("--height: must be in [16, 8192] pixels (got " + std::to_string(o.height) +
+                     ")");
+  if (o.every < 1) throw SceneError("--every: must be >= 1 (got " + std::to_string(o.every) + ")");
+  if (!(o.max_speed >= 0) || !std::isfinite(o.max_speed))
+    throw SceneError("--max-speed: must be a finite speed > 0 in m/s");
+}
+
+/// The fluid's bounds and speed scale over up to 48 frames spread over the whole run (not
+/// only the rendered ones, so that every render of a run has the same camera and colour
+/// scale).
+struct RunStatistics {
+  Aabb fluid_box;          ///< over the sampled frames
+  Aabb start_box;          ///< at frame 0
+  double speed_scale = 0;  ///< largest 99th percentile of the speeds (when asked)
+};
+
+RunStatistics sampleRun(const RunFile& file, std::size_t frames, bool speeds_too) {
+  RunStatistics stats;
+  const std::size_t samples = std::min<std::size_t>(frames, 48);
+  RunFrame f;
+  std::vector<double> speeds;
+  for (std::size_t s = 0; s < samples; ++s) {
+    const std::size_t k = samples == 1 ? 0 : s * (frames - 1) / (samples - 1);
+    file.readFrame(k, f, true, speeds_too);
+    const Aabb bounds = robustBounds(f.position);
+    stats.fluid_box.extend(bounds);
+    if (k == 0) stats.start_box = bounds;
+    if (speeds_too && !f.velocity.empty()) {
+      speeds.resize(f.velocity.size());
+      for (std::size_t i = 0; i < speeds.size(); ++i)
+        speeds[i] = f.velocity[i].norm();
+      stats.speed_scale = std::max(stats.speed_scale, quantile(speeds, 0.99));
+    }
+  }
+  return stats;
+}
+
+/// The camera's box: the fluid, the moving bodies wherever they go, static bodies that
+/// hold them (a tank) and the parts of other static bodies near them (an infinite plane
+/// is sampled over the whole domain). `static_bounds` (bodies): each static body's bounds.
+Aabb cameraBox(const Plan& plan, const Aabb& fluid_box, std::vector<Aabb>& static_bounds) {
+  Aabb box = fluid_box;
+  static_bounds.assign(plan.bodies.size(), Aabb());
+  for (std::size_t b = 0; b < plan.bodies.size(); ++b) {
+    const RunBody& body = plan.bodies[b];
+    Aabb local;
+    for (const Vec3& p : body.points)
+      local.extend(p);
+    if (local.empty()) continue;
+    if (body.kind == "static") {
+      static_bounds[b] = transformBounds(local, body.pose(0), true);
+    } else {
+      const std::size_t n = std::max<std::size_t>(body.position.size(), 1);
+      for (std::size_t k = 0; k < n; k += std::max<std::size_t>(1, n / 64))
+        box.extend(transformBounds(local, body.pose(k), true));
+      box.extend(transformBounds(local, body.pose(n - 1), true));
+    }
+  }
+  if (box.empty()) {  // no fluid and no moving body
+    for (const Aabb& s : static_bounds)
+      box.extend(s);
+  } else {
+    const double grow = std::max((box.max - box.min).maxCoeff(), 4 * plan.radius);
+    Aabb reach = box;
+    reach.min.array() -= grow;
+    reach.max.array() += grow;
+    const Vec3 centre = 0.5 * (box.min + box.max);
+    for (const Aabb& s : static_bounds) {
+      if (s.empty()) continue;
+      if (s.contains(centre)) {  // a container (tank): all of it
+        box.extend(s);
+        continue;
+      }
+      Aabb clipped;
+      clipped.min = s.min.cwiseMax(reach.min);
+      clipped.max = s.max.cwiseMin(reach.max);
+      box.extend(clipped);
+    }
+  }
+  if (box.empty()) box.extend(Vec3::Zero());
+  box.min.array() -= plan.radius;
+  box.max.array() += plan.radius;
+  return box;
+}
+
+/// The camera fitted to `box`, the section plane and the depth ramp's range (the fluid's).
+void placeCamera(Plan& plan, const Aabb& box, const Aabb& fluid_box, const RenderOptions& o) {
+  plan.camera = fitCamera(box, o.view, o.width, o.height);
+  // A section through the middle of the scene, facing the camera: bodies under water show.
+  if (o.section)
+    plan.section_depth = (0.5 * (box.min + box.max) - plan.camera.eye).dot(plan.camera.forward);
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int k = 0; k < 8; ++k) {
+    const double z = (fluid_box.empty() ? box : fluid_box).corner(k).dot(plan.camera.forward) -
+                     plan.camera.eye.dot(plan.camera.forward);
+    lo = std::min(lo, z);
+    hi = std::max(hi, z);
+  }
+  plan.near_depth = lo;
+  plan.far_depth = hi;
+}
+
+/// Colours, and the cut-away of containers: a static body whose bounds hold the centre of
+/// the fluid at the start loses the samples on the camera's side of its own centre (along
+/// each sample's normal), e.g. a tank keeps its floor and back walls but not its front wall.
+void colourBodies(Plan& plan, const std::vector<Aabb>& static_bounds, const Vec3& fluid_centre) {
+  std::size_t counts[3] = {0, 0, 0};
+  plan.visible.resize(plan.bodies.size());
+  for (std::size_t b = 0; b < plan.bodies.size(); ++b) {
+    const RunBody& body = plan.bodies[b];
+    const int kind = body.kind == "static" ? 0 : body.kind == "kinematic" ? 1 : 2;
+    plan.body_colors.push_back(bodyColor(body.kind, counts[kind]++));
+    const Aabb& s = static_bounds[b];
+    if (kind != 0 || s.empty() || !s.contains(fluid_centre)) continue;
+    const Vec3 centre = 0.5 * (s.min + s.max);
+    const Vec3 to_eye = (plan.camera.eye - centre).normalized();
+    const Pose pose = body.pose(0);
+    std::vector<std::uint8_t>& visible = plan.visible[b];
+    visible.assign(body.points.size(), 1);
+    for (std::size_t k = 0; k < body.points.size(); ++k) {
+      const Vec3 n = pose.rotate(body.normals[k]);
+      const double facing = n.dot(to_eye);
+      const double side = n.dot(pose.toWorld(body.points[k]) - centre);
+      if (std::abs(facing) > 0.2 && facing * side > 0) visible[k] = 0;
+    }
+  }
+}
+
+/// Draws the `selected` frames into out_dir: read in batches on one thread, drawn and
+/// written in parallel. Appends the images' paths to `images`.
+void drawFrames(const RunFile& file, const Plan& plan, const RenderOptions& o,
+                const std::string& out_dir, const std::string& scene,
+                const std::vector<std::size_t>& selected, std::vector<std::string>& images) {
+  const std::size_t batch = static_cast<std::size_t>(std::max(1, 2 * omp_get_max_threads()));
+  std::vector<RunFrame> data;
+  std::vector<std::string> errors;
+  for (std::size_t b0 = 0; b0 < selected.size(); b0 += batch) {
+    const std::size_t n = std::min(batch, selected.size() - b0);
+    data.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+      file.readFrame(selected[b0 + i], data[i], true, o.color == RenderColor::Speed);
+    errors.assign(n, std::string());
+#pragma omp parallel
+    {
+      Image im;
+      im.width = o.width;
+      im.height = o.height;
+#pragma omp for schedule(dynamic, 1)
+      for (long i = 0; i < static_cast<long>(n); ++i) {
+        try {
+          renderFrame(plan, data[static_cast<std::size_t>(i)], im);
+          const std::string path =
+              frameFile(out_dir, scene, data[static_cast<std::size_t>(i)].index);
+          if (stbi_write_png(path.c_str(), im.width, im.height, 3, im.rgb.data(), im.width * 3) ==
+              0)
+            errors[static_cast<std::size_t>(i)] = "cannot write " + path;
+        } catch (const std::exception& e) {
+          errors[static_cast<std::size_t>(i)] = e.what();
+        }
+      }
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!errors[i].empty()) throw std::runtime_error(errors[i]);
+      images.push_back(frameFile(out_dir, scene, data[i].index));
+    }
+  }
+}
+
+/// DIR/<scene>.mp4 from the frames with ffmpeg (skipped, with a line, when it is not on
+/// PATH). ffmpeg reads a numbered sequence without gaps: with --every > 1 it gets one made
+/// of links in a scratch folder.
+void writeVideo(const RenderOptions& o, const std::string& out_dir, const std::string& scene,
+                std::size_t first_frame, double frame_rate, RenderResult& result) {
+  if (!onPath("ffmpeg")) {
+    if (o.log) *o.log << "[wake] video skipped: ffmpeg is not on PATH" << std::endl;
+    return;
+  }
+  std::error_code ec;
+  std::string pattern = (fs::path(out_dir) / (scene + "_%06d.png")).string();
+  double rate = frame_rate > 0 ? frame_rate : 30.0;
+  std::size_t start_number = first_frame;
+  const fs::path links = fs::path(out_dir) / (".video_" + scene);
+  if (o.every > 1) {
+    fs::remove_all(links, ec);
+    fs::create_directories(links, ec);
+    for (std::size_t i = 0; i < result.images.size(); ++i)
+      fs::create_symlink(fs::absolute(result.images[i], ec), frameFile(links, scene, i), ec);
+    pattern = (links / (scene + "_%06d.png")).string();
+    rate /= static_cast<double>(o.every);
+    start_number = 0;
+  }
+  const std::string video = (fs::path(o.dir) / (scene + ".mp4")).string();
+  std::ostringstream cmd;
+  cmd << "ffmpeg -y -loglevel error -framerate " << rate << " -start_number " << start_number
+      << " -i " << shellQuote(pattern) << " -frames:v " << result.images.size()
+      << " -pix_fmt yuv420p -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' " << shellQuote(video);
+  const int status = std::system(cmd.str().c_str());
+  if (o.every > 1) fs::remove_all(links, ec);
+  if (status != 0) throw std::runtime_error("ffmpeg failed to write " + video);
+  result.video = video;
+  if (o.log) *o.log << "[wake] video " << video << std::endl;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
@@ -577,16 +632,8 @@ void parseFrameRange(const std::string& value, long& first, long& last, const st
 
 RenderResult renderRun(const RenderOptions& o) {
   const Clock::time_point start = Clock::now();
-  const QuietHdf5Errors quiet;
-  if (o.width < 16 || o.width > 8192)
-    throw SceneError("--width: must be in [16, 8192] pixels (got " + std::to_string(o.width) + ")");
-  if (o.height < 16 || o.height > 8192)
-    throw SceneError("--height: must be in [16, 8192] pixels (got " + std::to_string(o.height) +
-                     ")");
-  if (o.every < 1) throw SceneError("--every: must be >= 1 (got " + std::to_string(o.every) + ")");
-  if (!(o.max_speed >= 0) || !std::isfinite(o.max_speed))
-    throw SceneError("--max-speed: must be a finite speed > 0 in m/s");
-
+  const hdf5::QuietHdf5Errors quiet;
+  checkOptions(o);
   RenderResult result;
   result.h5_path = findH5(o);
   const RunFile file(result.h5_path);
@@ -608,123 +655,18 @@ RenderResult renderRun(const RenderOptions& o) {
   // Body samples lie on a lattice of the fluid's spacing 2r: splats of radius 0.75 * 2r
   // close the surface.
   plan.body_radius = 1.5 * plan.radius;
-  const double frame_rate = file.rootDouble("frame_rate", 30.0);
   plan.bodies = file.readBodies();
-
-  // Statistics over up to 48 frames spread over the whole run (not only the rendered
-  // ones, so that every render of a run has the same camera and colour scale).
-  Aabb fluid_box, start_box;  // over the sampled frames; at frame 0
-  std::vector<double> speeds;
-  double speed_scale = 0.0;
-  {
-    const std::size_t samples = std::min<std::size_t>(frames, 48);
-    FrameData f;
-    for (std::size_t s = 0; s < samples; ++s) {
-      const std::size_t k = samples == 1 ? 0 : s * (frames - 1) / (samples - 1);
-      file.readFrame(k, f, true, o.max_speed == 0);
-      const Aabb bounds = robustBounds(f.position);
-      fluid_box.extend(bounds);
-      if (k == 0) start_box = bounds;
-      if (o.max_speed == 0 && !f.velocity.empty()) {
-        speeds.resize(f.velocity.size());
-        for (std::size_t i = 0; i < speeds.size(); ++i)
-          speeds[i] = f.velocity[i].norm();
-        speed_scale = std::max(speed_scale, quantile(speeds, 0.99));
-      }
-    }
-  }
-  plan.max_speed = o.max_speed > 0 ? o.max_speed : std::max(speed_scale, 0.05);
+  const RunStatistics stats = sampleRun(file, frames, o.max_speed == 0);
+  plan.max_speed = o.max_speed > 0 ? o.max_speed : std::max(stats.speed_scale, 0.05);
   result.max_speed = plan.max_speed;
-
-  // The camera's box: the fluid, the moving bodies wherever they go, static bodies that
-  // hold them (a tank) and the parts of other static bodies near them (an infinite plane
-  // is sampled over the whole domain).
-  Aabb box = fluid_box;
-  std::vector<Aabb> static_bounds(plan.bodies.size());
-  for (std::size_t b = 0; b < plan.bodies.size(); ++b) {
-    const BodyData& body = plan.bodies[b];
-    Aabb local;
-    for (const Vec3& p : body.points)
-      local.extend(p);
-    if (local.empty()) continue;
-    if (body.kind == "static") {
-      static_bounds[b] = transformBounds(local, body.pose(0), true);
-    } else {
-      const std::size_t n = std::max<std::size_t>(body.position.size(), 1);
-      for (std::size_t k = 0; k < n; k += std::max<std::size_t>(1, n / 64))
-        box.extend(transformBounds(local, body.pose(k), true));
-      box.extend(transformBounds(local, body.pose(n - 1), true));
-    }
-  }
-  if (box.empty()) {  // no fluid and no moving body
-    for (const Aabb& s : static_bounds)
-      box.extend(s);
-  } else {
-    const double grow = std::max((box.max - box.min).maxCoeff(), 4 * plan.radius);
-    Aabb reach = box;
-    reach.min.array() -= grow;
-    reach.max.array() += grow;
-    const Vec3 centre = 0.5 * (box.min + box.max);
-    for (const Aabb& s : static_bounds) {
-      if (s.empty()) continue;
-      if (s.contains(centre)) {  // a container (tank): all of it
-        box.extend(s);
-        continue;
-      }
-      Aabb clipped;
-      clipped.min = s.min.cwiseMax(reach.min);
-      clipped.max = s.max.cwiseMin(reach.max);
-      box.extend(clipped);
-    }
-  }
-  if (box.empty()) box.extend(Vec3::Zero());
-  box.min.array() -= plan.radius;
-  box.max.array() += plan.radius;
-  plan.camera = fitCamera(box, o.view, o.width, o.height);
+  std::vector<Aabb> static_bounds;
+  const Aabb box = cameraBox(plan, stats.fluid_box, static_bounds);
+  placeCamera(plan, box, stats.fluid_box, o);
   result.camera = plan.camera;
-  // A section through the middle of the scene, facing the camera: bodies under water show.
-  if (o.section)
-    plan.section_depth = (0.5 * (box.min + box.max) - plan.camera.eye).dot(plan.camera.forward);
-  {
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (int k = 0; k < 8; ++k) {
-      const double z = (fluid_box.empty() ? box : fluid_box).corner(k).dot(plan.camera.forward) -
-                       plan.camera.eye.dot(plan.camera.forward);
-      lo = std::min(lo, z);
-      hi = std::max(hi, z);
-    }
-    plan.near_depth = lo;
-    plan.far_depth = hi;
-  }
+  const Aabb& held = stats.start_box.empty() ? stats.fluid_box : stats.start_box;
+  colourBodies(plan, static_bounds,
+               held.empty() ? 0.5 * (box.min + box.max) : Vec3(0.5 * (held.min + held.max)));
 
-  // Colours, and the cut-away of containers: a static body whose bounds hold the centre of
-  // the fluid at the start loses the samples on the camera's side of its own centre (along
-  // each sample's normal), e.g. a tank keeps its floor and back walls but not its front wall.
-  const Aabb& held = start_box.empty() ? fluid_box : start_box;
-  const Vec3 fluid_centre =
-      held.empty() ? 0.5 * (box.min + box.max) : Vec3(0.5 * (held.min + held.max));
-  std::size_t counts[3] = {0, 0, 0};
-  plan.visible.resize(plan.bodies.size());
-  for (std::size_t b = 0; b < plan.bodies.size(); ++b) {
-    const BodyData& body = plan.bodies[b];
-    const int kind = body.kind == "static" ? 0 : body.kind == "kinematic" ? 1 : 2;
-    plan.body_colors.push_back(bodyColor(body.kind, counts[kind]++));
-    const Aabb& s = static_bounds[b];
-    if (kind != 0 || s.empty() || !s.contains(fluid_centre)) continue;
-    const Vec3 centre = 0.5 * (s.min + s.max);
-    const Vec3 to_eye = (plan.camera.eye - centre).normalized();
-    const Pose pose = body.pose(0);
-    std::vector<std::uint8_t>& visible = plan.visible[b];
-    visible.assign(body.points.size(), 1);
-    for (std::size_t k = 0; k < body.points.size(); ++k) {
-      const Vec3 n = pose.rotate(body.normals[k]);
-      const double facing = n.dot(to_eye);
-      const double side = n.dot(pose.toWorld(body.points[k]) - centre);
-      if (std::abs(facing) > 0.2 && facing * side > 0) visible[k] = 0;
-    }
-  }
-
-  // Frames: read in batches on one thread, drawn and written in parallel.
   std::error_code ec;
   const std::string out_dir = o.out_dir.empty() ? (fs::path(o.dir) / "frames").string() : o.out_dir;
   fs::create_directories(out_dir, ec);
@@ -733,39 +675,7 @@ RenderResult renderRun(const RenderOptions& o) {
   std::vector<std::size_t> selected;
   for (long k = first; k <= last; k += o.every)
     selected.push_back(static_cast<std::size_t>(k));
-  const std::size_t batch = static_cast<std::size_t>(std::max(1, 2 * omp_get_max_threads()));
-  std::vector<FrameData> data;
-  std::vector<std::string> errors;
-  for (std::size_t b0 = 0; b0 < selected.size(); b0 += batch) {
-    const std::size_t n = std::min(batch, selected.size() - b0);
-    data.resize(n);
-    for (std::size_t i = 0; i < n; ++i)
-      file.readFrame(selected[b0 + i], data[i], true, o.color == RenderColor::Speed);
-    errors.assign(n, std::string());
-#pragma omp parallel
-    {
-      Image im;
-      im.width = o.width;
-      im.height = o.height;
-#pragma omp for schedule(dynamic, 1)
-      for (long i = 0; i < static_cast<long>(n); ++i) {
-        try {
-          renderFrame(plan, data[static_cast<std::size_t>(i)], im);
-          const std::string path =
-              frameFile(out_dir, scene, data[static_cast<std::size_t>(i)].index);
-          if (stbi_write_png(path.c_str(), im.width, im.height, 3, im.rgb.data(), im.width * 3) ==
-              0)
-            errors[static_cast<std::size_t>(i)] = "cannot write " + path;
-        } catch (const std::exception& e) {
-          errors[static_cast<std::size_t>(i)] = e.what();
-        }
-      }
-    }
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!errors[i].empty()) throw std::runtime_error(errors[i]);
-      result.images.push_back(frameFile(out_dir, scene, data[i].index));
-    }
-  }
+  drawFrames(file, plan, o, out_dir, scene, selected, result.images);
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   result.seconds_per_frame = seconds / static_cast<double>(selected.size());
   if (o.log) {
@@ -775,38 +685,8 @@ RenderResult renderRun(const RenderOptions& o) {
                   1000.0 * result.seconds_per_frame, plan.max_speed);
     *o.log << "[wake] rendered " << out_dir << "/" << scene << "_*.png: " << line << std::endl;
   }
-
-  if (o.video) {
-    if (!onPath("ffmpeg")) {
-      if (o.log) *o.log << "[wake] video skipped: ffmpeg is not on PATH" << std::endl;
-      return result;
-    }
-    // ffmpeg reads a numbered sequence without gaps: with --every > 1 it gets one made of
-    // links in a scratch folder.
-    std::string pattern = (fs::path(out_dir) / (scene + "_%06d.png")).string();
-    double rate = frame_rate > 0 ? frame_rate : 30.0;
-    std::size_t start_number = selected.front();
-    const fs::path links = fs::path(out_dir) / (".video_" + scene);
-    if (o.every > 1) {
-      fs::remove_all(links, ec);
-      fs::create_directories(links, ec);
-      for (std::size_t i = 0; i < result.images.size(); ++i)
-        fs::create_symlink(fs::absolute(result.images[i], ec), frameFile(links, scene, i), ec);
-      pattern = (links / (scene + "_%06d.png")).string();
-      rate /= static_cast<double>(o.every);
-      start_number = 0;
-    }
-    const std::string video = (fs::path(o.dir) / (scene + ".mp4")).string();
-    std::ostringstream cmd;
-    cmd << "ffmpeg -y -loglevel error -framerate " << rate << " -start_number " << start_number
-        << " -i " << shellQuote(pattern) << " -frames:v " << selected.size()
-        << " -pix_fmt yuv420p -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' " << shellQuote(video);
-    const int status = std::system(cmd.str().c_str());
-    if (o.every > 1) fs::remove_all(links, ec);
-    if (status != 0) throw std::runtime_error("ffmpeg failed to write " + video);
-    result.video = video;
-    if (o.log) *o.log << "[wake] video " << video << std::endl;
-  }
+  if (o.video)
+    writeVideo(o, out_dir, scene, selected.front(), file.rootDouble("frame_rate", 30.0), result);
   return result;
 }
 

@@ -33,6 +33,130 @@ int fail(int status, const std::string& message) {
   return status;
 }
 
+/// --threads N: sets OpenMP's thread count when given (N >= 1).
+void setThreads(const CLI::Option* option, int threads) {
+  if (option->count() == 0) return;
+  if (threads < 1)
+    throw wake::SceneError("--threads: must be >= 1 (got " + std::to_string(threads) + ")");
+  omp_set_num_threads(threads);
+}
+
+/// Runs `body`; a SceneError (bad input) exits 2, any other error 1, each one line.
+template <class F>
+int guarded(F&& body) {
+  try {
+    body();
+    return 0;
+  } catch (const wake::SceneError& e) {
+    return fail(kExitBadInput, e.what());
+  } catch (const std::exception& e) {
+    return fail(kExitRunFailed, e.what());
+  }
+}
+
+/// `wake run`: a scene headless, or --resume a stopped run.
+struct RunCommand {
+  CLI::App* app = nullptr;
+  std::string scene_path, out_dir, resume_dir;
+  bool quiet = false;
+  int threads = 0;
+  double end_time = 0.0, resolution = 1.0, checkpoint_every = 0.0;
+  CLI::Option *scene = nullptr, *out = nullptr, *resume = nullptr, *checkpoint = nullptr,
+              *threads_option = nullptr, *end = nullptr, *resolution_option = nullptr;
+
+  void add(CLI::App& parent) {
+    app = parent.add_subcommand(
+        "run", "Run a scene headless; write DIR/<scene>.h5, DIR/<scene>.xdmf, DIR/summary.json");
+    scene = app->add_option("scene", scene_path, "Scene file (JSON, see io/SCENE_FORMAT.md)");
+    out = app->add_option("--out,-o", out_dir, "Output folder (created when missing)");
+    resume = app->add_option(
+        "--resume", resume_dir,
+        "Continue the stopped run in DIR from its last checkpoint (no scene, --out, --end, "
+        "--resolution or --checkpoint-every with it)");
+    checkpoint = app->add_option(
+        "--checkpoint-every", checkpoint_every,
+        "Write DIR/checkpoint.h5 every T s of simulated time (at the first frame at or past it)");
+    app->add_flag("--quiet,-q", quiet, "No progress output");
+    threads_option =
+        app->add_option("--threads,-j", threads, "OpenMP threads (>= 1; default: all cores)");
+    end = app->add_option("--end", end_time, "End time in s, overrides the scene's time.end");
+    resolution_option = app->add_option(
+        "--resolution", resolution,
+        "Refinement factor F > 0: particle_radius / F, about F^3 times the particles");
+  }
+
+  void execute() const {
+    setThreads(threads_option, threads);
+    wake::RunOptions options;
+    options.quiet = quiet;
+    options.interactive = isatty(STDERR_FILENO) != 0;
+    options.log = &std::cerr;
+    if (resume->count() > 0) {
+      for (const CLI::Option* o : {scene, out, end, resolution_option, checkpoint})
+        if (o->count() > 0)
+          throw wake::SceneError("--resume: " + o->get_name() +
+                                 " cannot be given with it (the checkpoint holds the run's)");
+      options.out_dir = resume_dir;
+      wake::resumeRun(options);
+      return;
+    }
+    if (scene->count() == 0)
+      throw wake::SceneError("run: a scene file is required (or --resume DIR)");
+    if (out->count() == 0) throw wake::SceneError("--out: an output folder is required");
+    if (checkpoint->count() > 0 && (!std::isfinite(checkpoint_every) || !(checkpoint_every > 0)))
+      throw wake::SceneError("--checkpoint-every: must be a finite number > 0 (got " +
+                             std::to_string(checkpoint_every) + ")");
+    wake::SceneFile file = wake::loadScene(scene_path);
+    if (end->count() > 0) wake::overrideEndTime(file, end_time, "--end");
+    if (resolution_option->count() > 0) wake::overrideResolution(file, resolution, "--resolution");
+    options.out_dir = out_dir;
+    options.checkpoint_every = checkpoint_every;
+    wake::runScene(file, options);
+  }
+};
+
+/// `wake render`: a run's frames as PNG images.
+struct RenderCommand {
+  CLI::App* app = nullptr;
+  wake::RenderOptions options;
+  std::string color = "speed", view = "iso", frames;
+  bool quiet = false;
+  int threads = 0;
+  CLI::Option *frames_option = nullptr, *threads_option = nullptr;
+
+  void add(CLI::App& parent) {
+    app = parent.add_subcommand(
+        "render", "Draw a run's frames as PNG images (DIR/frames/<scene>_NNNNNN.png)");
+    app->add_option("dir", options.dir, "Output folder of wake run (holds <scene>.h5)")->required();
+    app->add_option("--out,-o", options.out_dir, "Folder for the PNGs (default DIR/frames)");
+    app->add_option("--scene", options.scene, "Which DIR/NAME.h5 when DIR holds several");
+    app->add_option("--color", color, "Colour the fluid by speed or depth (default speed)");
+    app->add_option("--width", options.width, "Image width in pixels (default 960)");
+    app->add_option("--height", options.height, "Image height in pixels (default 540)");
+    app->add_option("--view", view, "Camera: iso, front, side or top (default iso)");
+    frames_option = app->add_option("--frames", frames, "Frames to draw: A:B (inclusive) or K");
+    app->add_option("--every", options.every, "Draw every N-th frame (default 1)");
+    app->add_option("--max-speed", options.max_speed,
+                    "Speed at the top of the colour ramp, m/s (default: 99th percentile)");
+    app->add_flag("--section", options.section,
+                  "Cut the fluid in half (the half facing the camera is not drawn)");
+    app->add_flag("--video", options.video,
+                  "Also write DIR/<scene>.mp4 with ffmpeg (skipped when ffmpeg is missing)");
+    app->add_flag("--quiet,-q", quiet, "No progress output");
+    threads_option =
+        app->add_option("--threads,-j", threads, "OpenMP threads (>= 1; default: all)");
+  }
+
+  void execute() {
+    setThreads(threads_option, threads);
+    options.color = wake::parseRenderColor(color);
+    options.view = wake::parseRenderView(view);
+    if (frames_option->count() > 0) wake::parseFrameRange(frames, options.first, options.last);
+    if (!quiet) options.log = &std::cerr;
+    wake::renderRun(options);
+  }
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -40,63 +164,10 @@ int main(int argc, char** argv) {
                "wake");
   app.set_version_flag("--version", std::string("wake ") + wake::wakeVersion());
   app.require_subcommand(0, 1);  // none: an error below, naming what to type
-
-  std::string scene_path, out_dir;
-  bool quiet = false;
-  int threads = 0;
-  double end_time = 0.0, resolution = 1.0;
-  CLI::App* run = app.add_subcommand(
-      "run", "Run a scene headless; write DIR/<scene>.h5, DIR/<scene>.xdmf, DIR/summary.json");
-  std::string resume_dir;
-  double checkpoint_every = 0.0;
-  CLI::Option* scene_option =
-      run->add_option("scene", scene_path, "Scene file (JSON, see io/SCENE_FORMAT.md)");
-  CLI::Option* out_option =
-      run->add_option("--out,-o", out_dir, "Output folder (created when missing)");
-  CLI::Option* resume_option = run->add_option(
-      "--resume", resume_dir,
-      "Continue the stopped run in DIR from its last checkpoint (no scene, --out, --end, "
-      "--resolution or --checkpoint-every with it)");
-  CLI::Option* checkpoint_option = run->add_option(
-      "--checkpoint-every", checkpoint_every,
-      "Write DIR/checkpoint.h5 every T s of simulated time (at the first frame at or past it)");
-  run->add_flag("--quiet,-q", quiet, "No progress output");
-  CLI::Option* threads_option =
-      run->add_option("--threads,-j", threads, "OpenMP threads (>= 1; default: all cores)");
-  CLI::Option* end_option =
-      run->add_option("--end", end_time, "End time in s, overrides the scene's time.end");
-  CLI::Option* resolution_option = run->add_option(
-      "--resolution", resolution,
-      "Refinement factor F > 0: particle_radius / F, about F^3 times the particles");
-
-  wake::RenderOptions render_options;
-  std::string render_color = "speed", render_view = "iso", render_frames;
-  bool render_quiet = false;
-  int render_threads = 0;
-  CLI::App* render = app.add_subcommand(
-      "render", "Draw a run's frames as PNG images (DIR/frames/<scene>_NNNNNN.png)");
-  render->add_option("dir", render_options.dir, "Output folder of wake run (holds <scene>.h5)")
-      ->required();
-  render->add_option("--out,-o", render_options.out_dir,
-                     "Folder for the PNGs (default DIR/frames)");
-  render->add_option("--scene", render_options.scene, "Which DIR/NAME.h5 when DIR holds several");
-  render->add_option("--color", render_color, "Colour the fluid by speed or depth (default speed)");
-  render->add_option("--width", render_options.width, "Image width in pixels (default 960)");
-  render->add_option("--height", render_options.height, "Image height in pixels (default 540)");
-  render->add_option("--view", render_view, "Camera: iso, front, side or top (default iso)");
-  CLI::Option* frames_option =
-      render->add_option("--frames", render_frames, "Frames to draw: A:B (inclusive) or K");
-  render->add_option("--every", render_options.every, "Draw every N-th frame (default 1)");
-  render->add_option("--max-speed", render_options.max_speed,
-                     "Speed at the top of the colour ramp, m/s (default: 99th percentile)");
-  render->add_flag("--section", render_options.section,
-                   "Cut the fluid in half (the half facing the camera is not drawn)");
-  render->add_flag("--video", render_options.video,
-                   "Also write DIR/<scene>.mp4 with ffmpeg (skipped when ffmpeg is missing)");
-  render->add_flag("--quiet,-q", render_quiet, "No progress output");
-  CLI::Option* render_threads_option =
-      render->add_option("--threads,-j", render_threads, "OpenMP threads (>= 1; default: all)");
-
+  RunCommand run;
+  run.add(app);
+  RenderCommand render;
+  render.add(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -107,66 +178,6 @@ int main(int argc, char** argv) {
     return fail(kExitBadInput,
                 "a subcommand is required: wake run SCENE.json --out DIR or wake render DIR "
                 "(see wake --help)");
-
-  if (render->parsed()) {
-    try {
-      if (render_threads_option->count() > 0) {
-        if (render_threads < 1)
-          throw wake::SceneError("--threads: must be >= 1 (got " + std::to_string(render_threads) +
-                                 ")");
-        omp_set_num_threads(render_threads);
-      }
-      render_options.color = wake::parseRenderColor(render_color);
-      render_options.view = wake::parseRenderView(render_view);
-      if (frames_option->count() > 0)
-        wake::parseFrameRange(render_frames, render_options.first, render_options.last);
-      if (!render_quiet) render_options.log = &std::cerr;
-      wake::renderRun(render_options);
-      return 0;
-    } catch (const wake::SceneError& e) {
-      return fail(kExitBadInput, e.what());
-    } catch (const std::exception& e) {
-      return fail(kExitRunFailed, e.what());
-    }
-  }
-
-  try {
-    if (threads_option->count() > 0) {
-      if (threads < 1)
-        throw wake::SceneError("--threads: must be >= 1 (got " + std::to_string(threads) + ")");
-      omp_set_num_threads(threads);
-    }
-    wake::RunOptions options;
-    options.quiet = quiet;
-    options.interactive = isatty(STDERR_FILENO) != 0;
-    options.log = &std::cerr;
-    if (resume_option->count() > 0) {
-      for (const CLI::Option* o :
-           {scene_option, out_option, end_option, resolution_option, checkpoint_option})
-        if (o->count() > 0)
-          throw wake::SceneError("--resume: " + o->get_name() +
-                                 " cannot be given with it (the checkpoint holds the run's)");
-      options.out_dir = resume_dir;
-      wake::resumeRun(options);
-      return 0;
-    }
-    if (scene_option->count() == 0)
-      throw wake::SceneError("run: a scene file is required (or --resume DIR)");
-    if (out_option->count() == 0) throw wake::SceneError("--out: an output folder is required");
-    if (checkpoint_option->count() > 0 &&
-        (!std::isfinite(checkpoint_every) || !(checkpoint_every > 0)))
-      throw wake::SceneError("--checkpoint-every: must be a finite number > 0 (got " +
-                             std::to_string(checkpoint_every) + ")");
-    wake::SceneFile scene = wake::loadScene(scene_path);
-    if (end_option->count() > 0) wake::overrideEndTime(scene, end_time, "--end");
-    if (resolution_option->count() > 0) wake::overrideResolution(scene, resolution, "--resolution");
-    options.out_dir = out_dir;
-    options.checkpoint_every = checkpoint_every;
-    wake::runScene(scene, options);
-    return 0;
-  } catch (const wake::SceneError& e) {
-    return fail(kExitBadInput, e.what());
-  } catch (const std::exception& e) {
-    return fail(kExitRunFailed, e.what());
-  }
+  if (render.app->parsed()) return guarded([&] { render.execute(); });
+  return guarded([&] { run.execute(); });
 }

@@ -1,0 +1,57 @@
+// Reading a run's output back: the HDF5 file that `wake run` writes (layout in
+// io/output.hpp): its frames' particles and its bodies' surfaces and poses. Used by
+// `wake render` (render/); HDF5 is not thread-safe, so one RunFile is read on one thread.
+#pragma once
+
+#include "io/hdf5_handle.hpp"
+#include "sph/types.hpp"
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace wake {
+
+/// One body of a run: its boundary samples (body frame) and its pose per frame.
+struct RunBody {
+  std::string name, kind;             ///< kind: "static", "kinematic" or "dynamic"
+  std::vector<Vec3> points, normals;  ///< body frame
+  std::vector<Vec3> position;         ///< per frame
+  std::vector<Quat> orientation;      ///< per frame
+  /// The pose at frame `frame` (the last one past the end; identity without a series).
+  Pose pose(std::size_t frame) const;
+};
+
+/// The particles of one frame, in id order.
+struct RunFrame {
+  std::size_t index = 0;
+  std::vector<Vec3> position, velocity;
+};
+
+class RunFile {
+ public:
+  /// Opens `path` read-only; throws SceneError when it is not an HDF5 file.
+  explicit RunFile(const std::string& path);
+
+  /// A double attribute of the root (`fallback` when it is missing).
+  double rootDouble(const char* name, double fallback) const;
+  /// A string attribute of `object` (fixed or variable length); "" when missing.
+  static std::string stringAttribute(hid_t object, const char* name);
+  std::size_t frameCount() const;
+  /// Frame k's positions and/or velocities into `out`.
+  void readFrame(std::size_t k, RunFrame& out, bool positions, bool velocities) const;
+  std::vector<RunBody> readBodies() const;
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const;
+  /// Reads dataset `name` of rows x cols doubles into `out` (row-major).
+  void readFlat(hid_t group, const char* name, hsize_t cols, const std::string& where,
+                std::vector<double>& out) const;
+  void readRows(hid_t group, const char* name, hsize_t cols, const std::string& where,
+                std::vector<Vec3>& out) const;
+
+  std::string path_;
+  hdf5::Handle file_;
+};
+
+}  // namespace wake
