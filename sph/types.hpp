@@ -35,6 +35,13 @@ struct Aabb {
   bool contains(const Vec3& p) const {
     return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
   }
+  /// This box grown by `by` (m) on every side.
+  Aabb grown(double by) const {
+    Aabb b = *this;
+    b.min.array() -= by;
+    b.max.array() += by;
+    return b;
+  }
 };
 
 /// Rigid transform body -> world: x_world = orientation * x_body + position.

@@ -1,0 +1,248 @@
+// The walls' part of the fluid's sums (Boundaries, coupling/boundary.hpp): the density
+// share, the viscous shear (Morris et al. 1997 with the wall's velocity) and the pressure
+// force from the samples' extrapolated pressure (Adami, Hu & Adams 2012), each with its
+// reaction on two-way bodies, summed in fixed particle chunks (the same bits on any
+// number of threads).
+#include "coupling/boundary.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace wake {
+
+void Boundaries::addDensity(const Fluid& fluid, const BodyPlacement& at,
+                            std::vector<double>& density) const {
+  wallPass(fluid, at, density, nullptr, nullptr);
+}
+
+void Boundaries::addWallTerms(const Fluid& fluid, const BodyPlacement& at,
+                              std::vector<double>& density, std::vector<Vec3>& shear,
+                              std::vector<Wrench>& reaction) const {
+  wallPass(fluid, at, density, &shear, &reaction);
+}
+
+double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u,
+                            const Vec3& omega, Vec3& shear, Vec3* moment) const {
+  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
+  const double rb = radius_;
+  const double two_nu = 2.0 * nu;
+  double sum = 0.0;
+  set.grid.forEachRangeWithin(p, set.density_reach, [&](std::uint32_t lo, std::uint32_t hi) {
+    for (std::uint32_t k = lo; k < hi; ++k) {
+      const Vec3 d = p - set.position[k];
+      const double d_sq = d.squaredNorm();
+      if (d_sq >= support_sq) continue;
+      const double r = std::sqrt(d_sq);
+      sum += set.volume[k] * kernel_.value(r);
+      if (!(nu > 0.0)) continue;
+      const double factor = shear_factor_[set.body[k]];
+      if (factor <= 0.0) continue;
+      // Morris's ghost velocity: the sample lies rb behind the surface, the particle
+      // `beyond` in front of it; 1 + rb / beyond, at most 2 (a particle at or inside its
+      // radius).
+      const double beyond = d.dot(set.normal[k]) - rb;
+      const double beta = beyond > rb ? 1.0 + rb / beyond : 2.0;
+      const double w = -factor * two_nu * set.volume[k] * beta * kernel_.derivativeOverR(r);
+      const Vec3 rel = u - omega.cross(set.position[k]);
+      shear += w * rel;
+      if (moment) *moment += w * set.position[k].cross(rel);
+    }
+  });
+  return sum;
+}
+
+Vec3 Boundaries::pressureSum(const SampleSet& set, const std::vector<double>& p_rho2, const Vec3& p,
+                             double pr2, Vec3* moment) const {
+  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
+  Vec3 sum = Vec3::Zero();
+  set.grid.forEachRangeWithin(p, set.density_reach, [&](std::uint32_t lo, std::uint32_t hi) {
+    for (std::uint32_t k = lo; k < hi; ++k) {
+      const Vec3 d = p - set.position[k];
+      const double d_sq = d.squaredNorm();
+      if (d_sq >= support_sq) continue;
+      const Vec3 g =
+          ((pr2 + p_rho2[k]) * set.volume[k] * kernel_.derivativeOverR(std::sqrt(d_sq))) * d;
+      sum += g;
+      if (moment) *moment += set.position[k].cross(g);
+    }
+  });
+  return sum;
+}
+
+void Boundaries::wallPass(const Fluid& fluid, const BodyPlacement& at, std::vector<double>& density,
+                          std::vector<Vec3>* shear, std::vector<Wrench>* reaction) const {
+  const FluidState& st = fluid.state();
+  const std::vector<Vec3>& x = st.position;
+  const double rho0 = fluid_.rest_density;
+  const double mass = fluid.particleMass();
+  const bool has_static = !static_.position.empty();
+  const std::size_t n = x.size(), nb = bodies_.size();
+  const bool with_shear = shear && any_shear_;
+  // Without shear (every wall free-slip, or density only) `shear` is left empty.
+  if (shear) {
+    shear->clear();
+    if (with_shear) shear->resize(n);
+  }
+  if (reaction) reaction->assign(nb, Wrench{});
+  bool two_way = false;
+  for (const MovingBody& m : moving_)
+    two_way = two_way || (with_shear && bodies_[m.body].settings.twoWay());
+  const std::size_t chunks = (n + kChunk - 1) / kChunk;
+  if (two_way) chunk_reaction_.assign(chunks * nb, Wrench{});
+  const Vec3 zero = Vec3::Zero();
+#pragma omp parallel for schedule(static)
+  for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
+    const std::size_t end = std::min(n, (c + 1) * kChunk);
+    for (std::size_t i = c * kChunk; i < end; ++i) {
+      const Vec3 xi = x[i], vi = st.velocity[i];
+      const double nu = with_shear ? st.kinematic_viscosity[i] : 0.0;
+      double sum = 0.0;
+      Vec3 a = Vec3::Zero();
+      if (has_static && (static_.near[static_.grid.cellIndex(xi)] & kNearDensity)) {
+        Vec3 s = Vec3::Zero();
+        sum += wallSums(static_, xi, nu, vi, zero, s, nullptr);
+        a -= s;
+      }
+      if (at.moving_reach.contains(xi)) {
+        for (const MovingBody& m : moving_) {
+          const BodyFrame& f = at[m.body];
+          if (!f.world_reach.contains(xi)) continue;
+          const Mat3 rt = f.rotation.transpose();
+          const Vec3 p = rt * (xi - f.pose.position);
+          if (!m.samples.reach_box.contains(p)) continue;
+          const bool react = nu > 0.0 && bodies_[m.body].settings.twoWay();
+          Vec3 s = Vec3::Zero(), moment = Vec3::Zero();
+          sum += wallSums(m.samples, p, nu, rt * (vi - f.linear_velocity), rt * f.angular_velocity,
+                          s, react ? &moment : nullptr);
+          const Vec3 force = f.rotation * s;  // per unit fluid mass, on the body
+          a -= force;
+          if (react) {
+            Wrench& w = chunk_reaction_[c * nb + m.body];
+            w.force += mass * force;
+            w.torque += mass * (f.rotation * moment);
+          }
+        }
+      }
+      density[i] += rho0 * sum;
+      if (with_shear) (*shear)[i] = a;
+    }
+  }
+  if (!two_way) return;
+  for (std::size_t c = 0; c < chunks; ++c)
+    for (std::size_t b = 0; b < nb; ++b) {
+      (*reaction)[b].force += chunk_reaction_[c * nb + b].force;
+      (*reaction)[b].torque += chunk_reaction_[c * nb + b].torque;
+    }
+}
+
+void Boundaries::addWallPressure(const Fluid& fluid, const BodyPlacement& at,
+                                 const SamplePressure& pressure, std::vector<Vec3>& extra,
+                                 std::vector<Wrench>& reaction) const {
+  const FluidState& st = fluid.state();
+  const std::size_t n = st.size(), nb = bodies_.size();
+  if (n == 0 || nb == 0) return;
+  const std::vector<std::vector<double>>& p_rho2 = pressure.p_rho2;
+  bool ready = p_rho2.size() == moving_.size() + 1 && p_rho2[0].size() == static_.position.size();
+  for (std::size_t m = 0; m < moving_.size() && ready; ++m)
+    ready = p_rho2[m + 1].size() == moving_[m].samples.position.size();
+  if (!ready) throw std::logic_error("Boundaries::addWallPressure before computeSamplePressure");
+  if (extra.empty()) extra.assign(n, Vec3::Zero());
+  const double rho0 = fluid_.rest_density;
+  const double mass = fluid.particleMass();
+  const bool has_static = !static_.position.empty();
+  bool two_way = false;
+  for (const MovingBody& m : moving_)
+    two_way = two_way || bodies_[m.body].settings.twoWay();
+  const std::size_t chunks = (n + kChunk - 1) / kChunk;
+  if (two_way) chunk_reaction_.assign(chunks * nb, Wrench{});
+#pragma omp parallel for schedule(static)
+  for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
+    const std::size_t end = std::min(n, (c + 1) * kChunk);
+    for (std::size_t i = c * kChunk; i < end; ++i) {
+      const Vec3 xi = st.position[i];
+      const double pr2 = st.pressure[i] / (st.density[i] * st.density[i]);
+      Vec3 a = Vec3::Zero();
+      if (has_static && (static_.near[static_.grid.cellIndex(xi)] & kNearDensity))
+        a -= pressureSum(static_, p_rho2[0], xi, pr2, nullptr);
+      if (at.moving_reach.contains(xi)) {
+        for (std::size_t mi = 0; mi < moving_.size(); ++mi) {
+          const MovingBody& m = moving_[mi];
+          const BodyFrame& f = at[m.body];
+          if (!f.world_reach.contains(xi)) continue;
+          const Vec3 p = f.rotation.transpose() * (xi - f.pose.position);
+          if (!m.samples.reach_box.contains(p)) continue;
+          const bool react = bodies_[m.body].settings.twoWay();
+          Vec3 moment = Vec3::Zero();
+          const Vec3 sum = f.rotation * pressureSum(m.samples, p_rho2[mi + 1], p, pr2,
+                                                    react ? &moment : nullptr);
+          a -= sum;
+          if (react) {
+            Wrench& w = chunk_reaction_[c * nb + m.body];
+            w.force += (mass * rho0) * sum;
+            w.torque += (mass * rho0) * (f.rotation * moment);
+          }
+        }
+      }
+      extra[i] += rho0 * a;
+    }
+  }
+  if (!two_way) return;
+  // Fixed order (chunks): the same bits on any number of threads.
+  for (std::size_t c = 0; c < chunks; ++c)
+    for (std::size_t b = 0; b < nb; ++b) {
+      reaction[b].force += chunk_reaction_[c * nb + b].force;
+      reaction[b].torque += chunk_reaction_[c * nb + b].torque;
+    }
+}
+
+void Boundaries::computeSamplePressure(const Fluid& fluid, const BodyPlacement& at,
+                                       const Vec3& gravity, SamplePressure& out) const {
+  out.p_rho2.resize(moving_.size() + 1);
+  samplePressure(fluid, static_, Mat3::Identity(), Vec3::Zero(), gravity, out.p_rho2[0]);
+  for (std::size_t m = 0; m < moving_.size(); ++m) {
+    const BodyFrame& f = at[moving_[m].body];
+    samplePressure(fluid, moving_[m].samples, f.rotation, f.pose.position, gravity,
+                   out.p_rho2[m + 1]);
+  }
+}
+
+void Boundaries::samplePressure(const Fluid& fluid, const SampleSet& set, const Mat3& rotation,
+                                const Vec3& origin, const Vec3& gravity,
+                                std::vector<double>& p_rho2) const {
+  const std::size_t n = set.position.size();
+  p_rho2.assign(n, 0.0);
+  const FluidState& st = fluid.state();
+  if (st.size() == 0 || n == 0) return;
+  const UniformGrid& grid = fluid.grid();
+  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
+  const Aabb reach = fluid.particleBounds().grown(kernel_.supportRadius());
+  const std::int64_t count = static_cast<std::int64_t>(n);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t k = 0; k < count; ++k) {
+    const Vec3 xk = rotation * set.position[k] + origin;
+    if (!reach.contains(xk)) continue;
+    double w_sum = 0.0, p_sum = 0.0;
+    Vec3 rise = Vec3::Zero();  // sum_a rho_a (x_k - x_a) W_ka
+    grid.forEachNeighborRange(xk, [&](std::uint32_t lo, std::uint32_t hi) {
+      for (std::uint32_t a = lo; a < hi; ++a) {
+        const Vec3 d = xk - st.position[a];
+        const double d_sq = d.squaredNorm();
+        if (d_sq >= support_sq) continue;
+        const double w = kernel_.value(std::sqrt(d_sq));
+        w_sum += w;
+        p_sum += st.pressure[a] * w;
+        rise += (st.density[a] * w) * d;
+      }
+    });
+    if (w_sum == 0.0) continue;  // no fluid near: no pressure
+    const double p = std::max(0.0, (p_sum + gravity.dot(rise)) / w_sum);
+    if (p == 0.0) continue;
+    const double rho = fluid_.densityAt(p);
+    p_rho2[k] = p / (rho * rho);
+  }
+}
+
+}  // namespace wake
