@@ -163,13 +163,13 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
   }
   require(rigid_->count() == s.bodies.size(), "bodies",
           "the rigid-body integrator has a different number of bodies");
-  fluid_ = std::make_unique<Fluid>(s.fluid, s.domain);
+  fluid_ = std::make_unique<Fluid>(s.fluid, s.domain, &data_.fluid);
   boundaries_ = std::make_unique<Boundaries>(s.fluid, s.domain);
   for (const BodySettings& b : s.bodies)
     boundaries_->addBody(b);
   boundaries_->finalize();
   const BodyPlacement start = placement();
-  wrench_.assign(s.bodies.size(), Wrench{});
+  data_.wrenches.assign(s.bodies.size(), Wrench{});
 
   // Fill the blocks on the lattice; drop particles outside the domain, inside a body, or
   // closer to a body's surface than their radius (starting overlap blows up runs).
@@ -189,7 +189,7 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
           const Vec3 x = b.min + sp * Vec3(i + 0.5, j + 0.5, k + 0.5);
           const bool inside_domain = s.domain.contains(x);
           if (!inside_domain || boundaries_->signedDistance(x, start) < (1.0 - 1e-6) * rf) {
-            ++run_.removed_at_start;
+            ++data_.run.removed_at_start;
             ++next_id;
             continue;
           }
@@ -229,7 +229,7 @@ void Simulation::removeOutsideDomain() {
     fail(checkFluidHealth(st, model_.fluid.rest_density, model_.health.max_density_ratio));
   if (out == 0) return;
   st.removeIf(work_.flags);
-  run_.lost += out;
+  data_.run.lost += out;
 }
 
 void Simulation::fail(const FluidHealth& health) {
@@ -238,8 +238,8 @@ void Simulation::fail(const FluidHealth& health) {
   const std::size_t i = health.slot;
   const Vec3 x = st.position[i];
   std::ostringstream m;
-  m << "step " << run_.steps << " (t = " << run_.time << " s): fluid particle " << st.id[i]
-    << " at (" << x.x() << ", " << x.y() << ", " << x.z() << ") m has "
+  m << "step " << data_.run.steps << " (t = " << data_.run.time << " s): fluid particle "
+    << st.id[i] << " at (" << x.x() << ", " << x.y() << ", " << x.z() << ") m has "
     << describeProblem(health, st, f.rest_density);
   if (health.problem == FluidHealth::Problem::DensityRatio) {
     m << ", above health.max_density_ratio = " << model_.health.max_density_ratio
@@ -253,7 +253,7 @@ void Simulation::fail(const FluidHealth& health) {
       << ") or time.max_dt (now " << model_.max_dt << " s), or raise fluid.speed_of_sound (now "
       << f.speed_of_sound << " m/s)";
   }
-  failure_.emplace(m.str(), run_.steps, run_.time, st.id[i], x);
+  failure_.emplace(m.str(), data_.run.steps, data_.run.time, st.id[i], x);
   throw *failure_;
 }
 
@@ -282,7 +282,7 @@ double Simulation::chooseDt(double t_limit) const {
   }
   const double dt = stableTimeStep(model_.fluid, model_.cfl, model_.max_dt, v_max,
                                    fluid_->maxAcceleration(), nu_max_);
-  const double remaining = t_limit - run_.time;
+  const double remaining = t_limit - data_.run.time;
   // Land exactly on t_limit, and never leave a sliver step behind.
   if (remaining <= dt) return remaining;
   if (remaining < 1.5 * dt) return 0.5 * remaining;
@@ -291,7 +291,7 @@ double Simulation::chooseDt(double t_limit) const {
 
 double Simulation::step(double t_limit) {
   if (failure_) throw *failure_;
-  if (!(t_limit > run_.time)) return 0.0;
+  if (!(t_limit > data_.run.time)) return 0.0;
   findNeighbors();
   computeFluidForces();
   auto t0 = Clock::now();
@@ -301,9 +301,9 @@ double Simulation::step(double t_limit) {
   const ControlResult control = controlVelocities(dt);
   stepBodies(dt);
   integrateAndCorrect(dt, control);
-  run_.time = (t_limit - run_.time == dt) ? t_limit : run_.time + dt;
-  run_.last_dt = dt;
-  ++run_.steps;
+  data_.run.time = (t_limit - data_.run.time == dt) ? t_limit : data_.run.time + dt;
+  data_.run.last_dt = dt;
+  ++data_.run.steps;
   checkHealth();
   return dt;
 }
@@ -344,15 +344,15 @@ void Simulation::computeFluidForces() {
   if (penalty_) {
     // Baseline: boundary forces join the fluid's forces; no control, no correction.
     t0 = Clock::now();
-    run_.last_contacts = penalty_->apply(*boundaries_, work_.placed, st.position, st.acceleration,
-                                         work_.flags, wrench_);
+    data_.run.last_contacts = penalty_->apply(*boundaries_, work_.placed, st.position,
+                                              st.acceleration, work_.flags, data_.wrenches);
     const double t_penalty = secondsSince(t0);
     timings_.control += t_penalty;
     timings_.boundary += t_penalty;
   }
   if (fluid_forces_) {
     t0 = Clock::now();
-    fluid_forces_(st, st.acceleration, run_.time);
+    fluid_forces_(st, st.acceleration, data_.run.time);
     if (st.acceleration.size() != st.size())
       throw std::logic_error("FluidForces changed the size of the acceleration array");
     timings_.forces += secondsSince(t0);
@@ -383,8 +383,8 @@ ControlResult Simulation::controlVelocities(double dt) {
   FluidState& st = fluid_->state();
   const ControlResult control = forcing_.control(
       *boundaries_, {work_.placed, work_.body_now, work_.body_pred},
-      {work_.x_pred, work_.v_old, st.velocity, work_.flags}, model_.method, dt, wrench_);
-  run_.last_contacts = control.contacts;
+      {work_.x_pred, work_.v_old, st.velocity, work_.flags}, model_.method, dt, data_.wrenches);
+  data_.run.last_contacts = control.contacts;
   const double t_control = secondsSince(t0);
   timings_.control += t_control;
   timings_.boundary += t_control;
@@ -397,10 +397,10 @@ void Simulation::stepBodies(double dt) {
   const auto t0 = Clock::now();
   const std::size_t nb = boundaries_->bodyCount();
   for (std::size_t b = 0; b < nb; ++b) {
-    wrench_[b].force += work_.wall_reaction[b].force;
-    wrench_[b].torque += work_.wall_reaction[b].torque;
+    data_.wrenches[b].force += work_.wall_reaction[b].force;
+    data_.wrenches[b].torque += work_.wall_reaction[b].torque;
   }
-  if (nb > 0) rigid_->step(dt, wrench_);
+  if (nb > 0) rigid_->step(dt, data_.wrenches);
   currentStates(work_.body_final);
   timings_.rigid += secondsSince(t0);
 }
@@ -429,22 +429,20 @@ void Simulation::checkHealth() {
   if (!health.ok()) fail(health);
   const double ratio = health.max_density_ratio;
   const std::size_t penetrating = boundaries_->countInside(st.position, work_.placed);
-  run_.max_density_ratio = std::max(run_.max_density_ratio, ratio);
-  run_.max_penetrating = std::max(run_.max_penetrating, penetrating);
-  run_.window_density_ratio = std::max(run_.window_density_ratio, ratio);
-  run_.window_penetrating = std::max(run_.window_penetrating, penetrating);
+  data_.run.max_density_ratio = std::max(data_.run.max_density_ratio, ratio);
+  data_.run.max_penetrating = std::max(data_.run.max_penetrating, penetrating);
+  data_.run.window_density_ratio = std::max(data_.run.window_density_ratio, ratio);
+  data_.run.window_penetrating = std::max(data_.run.window_penetrating, penetrating);
 }
 
 void Simulation::advanceTo(double t) {
-  while (run_.time < t)
+  while (data_.run.time < t)
     step(t);
 }
 
 SimulationState Simulation::saveState() const {
   SimulationState s;
-  s.run = run_;
-  s.fluid = fluid_->state();
-  s.wrenches = wrench_;
+  static_cast<RunData&>(s) = data_;
   s.rigid = rigid_->saveState();
   return s;
 }
@@ -456,15 +454,13 @@ void Simulation::restoreState(const SimulationState& s) {
                            f.density.size() == n && f.pressure.size() == n && f.id.size() == n &&
                            f.kinematic_viscosity.size() == n;
   require(sizes_agree, "state.fluid", "its arrays differ in length");
-  require(s.wrenches.size() == wrench_.size(), "state.wrenches",
+  require(s.wrenches.size() == data_.wrenches.size(), "state.wrenches",
           "has " + std::to_string(s.wrenches.size()) + " bodies, the simulation " +
-              std::to_string(wrench_.size()));
+              std::to_string(data_.wrenches.size()));
   require(std::isfinite(s.run.time) && s.run.time >= 0, "state.run.time",
           "must be finite and >= 0");
   rigid_->loadState(s.rigid);
-  fluid_->state() = f;
-  run_ = s.run;
-  wrench_ = s.wrenches;
+  data_ = static_cast<const RunData&>(s);  // fluid_ steps data_.fluid
   failure_.reset();
 }
 

@@ -102,10 +102,6 @@ struct BodyState {
   Vec3 angular_velocity = Vec3::Zero();  ///< rad/s
 };
 
-/// Everything of a run that changes from step to step (what a checkpoint holds): with a
-/// Simulation built again from the same settings, restoreState() continues the run bit
-/// for bit. The fluid's arrays are in the simulation's current slot order (not id order):
-/// the order decides the order of sums, so it is part of the state.
 /// The run's counters and maxima: what changes besides the particles and the bodies.
 struct RunCounters {
   double time = 0;                     ///< s
@@ -124,11 +120,21 @@ struct RunCounters {
 /// Simulation built again from the same settings, restoreState() continues the run bit
 /// for bit. The fluid's arrays are in the simulation's current slot order (not id order):
 /// the order decides the order of sums, so it is part of the state.
-struct SimulationState {
+/// What changes during a run on the fluid's side, in the one place Simulation keeps it
+/// (the bodies' states are the rigid-body side's). The fluid's arrays are in the
+/// simulation's current slot order (not id order): the order decides the order of sums,
+/// so it is part of the state.
+struct RunData {
   RunCounters run;
   FluidState fluid;              ///< every per-particle array
   std::vector<Wrench> wrenches;  ///< (bodies) the fluid's wrench in the last step
-  std::vector<double> rigid;     ///< RigidBodies::saveState()
+};
+
+/// Everything of a run that changes from step to step (what a checkpoint holds): the run's
+/// data and the rigid-body side's numbers. With a Simulation built again from the same
+/// settings, restoreState() continues the run bit for bit.
+struct SimulationState : RunData {
+  std::vector<double> rigid;  ///< RigidBodies::saveState()
 };
 
 /// Wall-clock seconds spent in each part of the step, summed over steps.
@@ -174,8 +180,8 @@ class Simulation {
   /// Their accelerations count in the time step's limits like the fluid's own.
   void setFluidForces(FluidForces forces) { fluid_forces_ = std::move(forces); }
 
-  double time() const { return run_.time; }
-  std::uint64_t steps() const { return run_.steps; }
+  double time() const { return data_.run.time; }
+  std::uint64_t steps() const { return data_.run.steps; }
   /// The settings as given (speed_of_sound 0 = "auto", an empty domain, ...).
   const SimulationSettings& settings() const { return settings_; }
   /// The run's constant model: the settings with every automatic value resolved (speed of
@@ -186,33 +192,33 @@ class Simulation {
   const Boundaries& boundaries() const { return *boundaries_; }
   const RigidBodies& rigidBodies() const { return *rigid_; }
   /// The fluid's wrench on each body in the last step (zero for one-way bodies).
-  const std::vector<Wrench>& lastWrenches() const { return wrench_; }
+  const std::vector<Wrench>& lastWrenches() const { return data_.wrenches; }
   /// Particle-body contacts found in the last step.
-  std::size_t lastContacts() const { return run_.last_contacts; }
+  std::size_t lastContacts() const { return data_.run.last_contacts; }
   /// (n) 1 where a fluid particle (in the current order) was in contact in the last step
   /// (with the penalty method: a sample within the penalty reach).
   const std::vector<std::uint8_t>& lastInContact() const { return work_.flags; }
 
   std::size_t fluidParticles() const { return fluid_->state().size(); }
   std::size_t boundaryParticles() const;
-  std::size_t removedAtStart() const { return run_.removed_at_start; }
+  std::size_t removedAtStart() const { return data_.run.removed_at_start; }
   /// Fluid particles removed because they left the domain (never for a non-finite value:
   /// that stops the run with a HealthError).
-  std::size_t lostParticles() const { return run_.lost; }
+  std::size_t lostParticles() const { return data_.run.lost; }
   /// Most fluid particle centres strictly inside a body's exact shape after any step.
-  std::size_t maxPenetrating() const { return run_.max_penetrating; }
+  std::size_t maxPenetrating() const { return data_.run.max_penetrating; }
   /// Fluid centres strictly inside a body's exact shape now.
   std::size_t countPenetrating() const;
   /// Largest density / rest density seen after any step.
-  double maxDensityRatio() const { return run_.max_density_ratio; }
+  double maxDensityRatio() const { return data_.run.max_density_ratio; }
   /// The same two maxima over the steps since the last resetWindow() (e.g. one frame).
-  double windowMaxDensityRatio() const { return run_.window_density_ratio; }
-  std::size_t windowMaxPenetrating() const { return run_.window_penetrating; }
+  double windowMaxDensityRatio() const { return data_.run.window_density_ratio; }
+  std::size_t windowMaxPenetrating() const { return data_.run.window_penetrating; }
   void resetWindow() {
-    run_.window_density_ratio = 0;
-    run_.window_penetrating = 0;
+    data_.run.window_density_ratio = 0;
+    data_.run.window_penetrating = 0;
   }
-  double lastDt() const { return run_.last_dt; }
+  double lastDt() const { return data_.run.last_dt; }
 
   /// The run's changing state (checkpoints). Throws std::logic_error when the rigid-body
   /// integrator cannot be saved.
@@ -257,14 +263,13 @@ class Simulation {
 
   const SimulationSettings settings_;  // as given
   SimulationSettings model_;           // resolved in the constructor, constant after
-  std::unique_ptr<Fluid> fluid_;
+  RunData data_;  // what changes (with the rigid side's states); fluid_ steps data_.fluid
+  std::unique_ptr<Fluid> fluid_;  // the fluid's model and scratch; steps data_.fluid
   std::unique_ptr<Boundaries> boundaries_;
   std::unique_ptr<RigidBodies> rigid_;
   DirectForcing forcing_;
   std::unique_ptr<PenaltyBoundary> penalty_;  // method Penalty only
-  double nu_max_ = 0;           // m^2/s, largest kinematic viscosity of the fluid (set at start)
-  RunCounters run_;             // with the fluid's state and the rigid bodies': what changes
-  std::vector<Wrench> wrench_;  // (bodies) the fluid's wrench in the last step
+  double nu_max_ = 0;  // m^2/s, largest kinematic viscosity of the fluid (set at start)
   StepTimings timings_;
   /// Scratch space of the step, reused every step (no state: nothing in it outlives one).
   struct Workspace {

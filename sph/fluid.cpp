@@ -74,12 +74,13 @@ void FluidState::append(const Vec3& x, const Vec3& v, std::uint32_t particle_id,
   kinematic_viscosity.push_back(nu);
 }
 
-Fluid::Fluid(const FluidParams& params, const Aabb& domain)
+Fluid::Fluid(const FluidParams& params, const Aabb& domain, FluidState* state)
     : params_(params),
       kernel_(params.smoothingLength()),
       domain_(domain),
       mass_(params.particleMass()),
-      grid_(domain, params.supportRadius()) {
+      grid_(domain, params.supportRadius()),
+      state_(state ? *state : own_) {
   if (!(params.speed_of_sound > 0.0) || !std::isfinite(params.speed_of_sound))
     throw std::invalid_argument("fluid.speed_of_sound must be finite and > 0");
 }

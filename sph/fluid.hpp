@@ -79,10 +79,14 @@ struct FluidState {
   void append(const Vec3& x, const Vec3& v, std::uint32_t particle_id, double nu);
 };
 
-/// The fluid solver: owns parameters, state, the neighbour grid and scratch space.
+/// The fluid solver: its parameters (the model), the neighbour grid and scratch space, and
+/// the state it steps. The state is the caller's (`state`: Simulation keeps it with the
+/// rest of a run's data, coupling/simulation.hpp) or, without one, the solver's own.
 class Fluid {
  public:
-  Fluid(const FluidParams& params, const Aabb& domain);
+  Fluid(const FluidParams& params, const Aabb& domain, FluidState* state = nullptr);
+  Fluid(const Fluid&) = delete;
+  Fluid& operator=(const Fluid&) = delete;
 
   const FluidParams& params() const { return params_; }
   const CubicSplineKernel& kernel() const { return kernel_; }
@@ -134,7 +138,8 @@ class Fluid {
   double mass_;
   UniformGrid grid_;
   Aabb bounds_;
-  FluidState state_;
+  FluidState own_;     ///< the state when the caller gave none
+  FluidState& state_;  ///< the state stepped: the caller's or own_
   FluidState scratch_;
   NeighborList neighbors_;
   std::vector<std::uint32_t> order_;   ///< (n) scratch: cell-sort permutation
