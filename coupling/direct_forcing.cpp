@@ -40,6 +40,12 @@ Vec6 GlobalSystem::solve(double inverse_mass, const Mat3& inverse_inertia) const
   return matrix(inverse_mass, inverse_inertia).ldlt().solve(b_);
 }
 
+template <class F>
+void DirectForcing::forEachParticle(const std::vector<Record>& records, F&& f) {
+  for (std::size_t k = 0; k < records.size(); k += records[k].count)
+    f(&records[k], static_cast<std::size_t>(records[k].count));
+}
+
 double DirectForcing::normalMass(const Record& rec,
                                  const std::vector<RigidPrediction>& predicted) const {
   // Effective mass of a normal impulse at a contact: 1 / (n^T K n).
@@ -156,14 +162,11 @@ void DirectForcing::solveLocal(const std::vector<RigidPrediction>& predicted,
 #pragma omp parallel for schedule(dynamic, 1)
   for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunk_count); ++c) {
     Chunk& ch = chunks_[c];
-    for (std::size_t k = 0; k < ch.records.size();) {
-      const Record* rec = &ch.records[k];
-      const std::size_t count = rec->count;
+    forEachParticle(ch.records, [&](const Record* rec, std::size_t count) {
       Vec3 vi = v[rec->particle];
       normalPasses(ch, rec, count, vi, predicted, none, count > 1 ? 3 : 1);
       v[rec->particle] = vi;
-      k += count;
-    }
+    });
   }
 }
 
@@ -202,9 +205,7 @@ void DirectForcing::solveGlobal(const std::vector<RigidPrediction>& predicted, d
 #pragma omp parallel for schedule(dynamic, 1)
   for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunk_count); ++c) {
     Chunk& ch = chunks_[c];
-    for (std::size_t k = 0; k < ch.records.size();) {
-      const Record* rec = &ch.records[k];
-      const std::size_t count = rec->count;
+    forEachParticle(ch.records, [&](const Record* rec, std::size_t count) {
       const std::uint32_t i = rec->particle;
       // Each contact's share of the particle: its psi plus the body's normal velocity
       // change at the contact, along the normal.
@@ -214,8 +215,7 @@ void DirectForcing::solveGlobal(const std::vector<RigidPrediction>& predicted, d
             ((rec[q].psi + rec[q].normal.dot(bodyChange(rec[q]))) / double(count)) * rec[q].normal;
       if (count > 1) normalPasses(ch, rec, count, vi, predicted, bodyChange, 2);
       v[i] = vi;
-      k += count;
-    }
+    });
   }
 }
 
@@ -230,10 +230,7 @@ void DirectForcing::supportBackedContacts(double dt, const std::vector<RigidPred
   // Gauss-Seidel (accumulated impulses >= 0), in the fixed order of the particles.
   backed_.clear();
   for (std::size_t c = 0; c < chunk_count; ++c) {
-    const std::vector<Record>& records = chunks_[c].records;
-    for (std::size_t k = 0; k < records.size();) {
-      const Record* rec = &records[k];
-      const std::size_t count = rec->count;
+    forEachParticle(chunks_[c].records, [&](const Record* rec, std::size_t count) {
       for (std::size_t a = 0; a < count && count > 1; ++a) {
         if (!two_way[rec[a].body]) continue;
         // The most opposed one-way contact backs it.
@@ -247,8 +244,7 @@ void DirectForcing::supportBackedContacts(double dt, const std::vector<RigidPred
         backed_.push_back(rec[a]);
         backed_.back().backer = rec[backer].v_cp;
       }
-      k += count;
-    }
+    });
   }
   if (backed_.empty()) return;
   const std::size_t nb = wrench.size();

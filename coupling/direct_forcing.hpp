@@ -150,6 +150,9 @@ class DirectForcing {
   /// as on the wall behind it and cannot squeeze it into either.
   void supportBackedContacts(double dt, const std::vector<RigidPrediction>& predicted,
                              std::size_t chunk_count, std::vector<Wrench>& wrench);
+  /// Calls f(first record, contact count) for each particle's run of records in `records`.
+  template <class F>
+  static void forEachParticle(const std::vector<Record>& records, F&& f);
   /// Effective mass 1 / (n^T K n) of a normal impulse at a contact.
   double normalMass(const Record& rec, const std::vector<RigidPrediction>& predicted) const;
   /// Impulse j on the particle (velocity vi); its reaction into the chunk's body sums.
