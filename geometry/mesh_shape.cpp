@@ -299,6 +299,12 @@ class MeshShape final : public Shape {
 
   Aabb bounds(const Aabb&) const override { return bounds_; }
 
+  bool triangulate(const Aabb&, SurfaceMesh& out) const override {
+    for (const Triangle& t : triangles_)
+      out.addTriangle(t.v[0], t.v[1], t.v[2]);
+    return true;
+  }
+
   /// Each triangle is cut into n^2 congruent sub-triangles, n = ceil(longest edge / spacing);
   /// one sample per sub-triangle centroid, with the face normal and area / n^2.
   void sample(double spacing, double radius, const Aabb&, SurfaceSamples& out) const override {

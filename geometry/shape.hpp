@@ -10,6 +10,7 @@
 #include "sph/types.hpp"
 
 #include <array>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -29,6 +30,19 @@ struct SurfaceSamples {
     normal.clear();
     area.clear();
   }
+};
+
+/// A triangle mesh of a shape's surface (body space): triangles counter-clockwise seen from
+/// outside (the solid's side is behind each triangle's front).
+struct SurfaceMesh {
+  std::vector<Vec3> vertices;                        ///< m
+  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< indices into vertices
+
+  void addTriangle(const Vec3& a, const Vec3& b, const Vec3& c);
+  /// Two triangles (a, b, c), (a, c, d) of the quad a b c d (counter-clockwise).
+  void addQuad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
+  /// Appends `other` with its vertices placed by `pose`.
+  void append(const SurfaceMesh& other, const Pose& pose);
 };
 
 /// Steiner data of a convex body K: for r >= 0 the body K grown by a ball of radius r
@@ -68,6 +82,16 @@ class Shape {
   /// Steiner data for convex shapes that know it exactly (used by makeRounded for an exact
   /// volume and area); std::nullopt (the default) for non-convex shapes or when unknown.
   virtual std::optional<ConvexMeasures> convexMeasures() const { return std::nullopt; }
+
+  /// Appends the exact surface as triangles (for infinite shapes, the part covering
+  /// `clip`) and returns true; returns false, appending nothing, for curved shapes, which
+  /// only a tessellation approximates (surface/shape_mesh.hpp meshes those from the signed
+  /// distance). Exact: box, plane, tank, mesh, compounds of these.
+  virtual bool triangulate(const Aabb& clip, SurfaceMesh& out) const {
+    (void)clip;
+    (void)out;
+    return false;
+  }
 };
 
 /// Throws std::invalid_argument unless `spacing` is finite and > 0 and `radius` finite and

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -36,45 +37,72 @@ int cellCount(double length, double spacing) {
   return std::max(1, static_cast<int>(std::lround(length / spacing)));
 }
 
-/// Samples the flat rectangle {corner + a u + b v : a in [0, len_u], b in [0, len_v]}
-/// (u, v unit and orthogonal, lengths in m) with outward unit normal `normal`: one sample
-/// per cell centre of an nu x nv grid of about `spacing`, placed `radius` below the surface.
-void sampleRectangle(const Vec3& corner, const Vec3& u, double len_u, const Vec3& v, double len_v,
-                     const Vec3& normal, double spacing, double radius, SurfaceSamples& out) {
-  if (!(len_u > 0.0) || !(len_v > 0.0)) return;
-  const int nu = cellCount(len_u, spacing);
-  const int nv = cellCount(len_v, spacing);
-  const double du = len_u / nu;  // m, cell size along u
-  const double dv = len_v / nv;  // m, cell size along v
+/// The flat rectangle {corner + a u + b v : a in [0, len_u], b in [0, len_v]} (u, v unit
+/// and orthogonal, lengths in m) with outward unit normal `normal`: a face of a box, a tank
+/// or a clipped plane.
+struct Rectangle {
+  Vec3 corner, u;
+  double len_u;
+  Vec3 v;
+  double len_v;
+  Vec3 normal;
+};
+
+/// Samples a rectangle: one sample per cell centre of an nu x nv grid of about `spacing`,
+/// placed `radius` below the surface.
+void sampleRectangle(const Rectangle& r, double spacing, double radius, SurfaceSamples& out) {
+  if (!(r.len_u > 0.0) || !(r.len_v > 0.0)) return;
+  const int nu = cellCount(r.len_u, spacing);
+  const int nv = cellCount(r.len_v, spacing);
+  const double du = r.len_u / nu;  // m, cell size along u
+  const double dv = r.len_v / nv;  // m, cell size along v
   for (int i = 0; i < nu; ++i) {
     for (int j = 0; j < nv; ++j) {
-      const Vec3 surface_point = corner + ((i + 0.5) * du) * u + ((j + 0.5) * dv) * v;
-      out.position.push_back(surface_point - radius * normal);
-      out.normal.push_back(normal);
+      const Vec3 surface_point = r.corner + ((i + 0.5) * du) * r.u + ((j + 0.5) * dv) * r.v;
+      out.position.push_back(surface_point - radius * r.normal);
+      out.normal.push_back(r.normal);
       out.area.push_back(du * dv);
     }
   }
 }
 
-/// Samples the face of the box [lo, hi] whose outward normal is `sign` * e_axis.
-void sampleBoxFace(const Vec3& lo, const Vec3& hi, int axis, double sign, double spacing,
-                   double radius, SurfaceSamples& out) {
+/// Appends a rectangle as two triangles, counter-clockwise seen from its normal's side.
+void meshRectangle(const Rectangle& r, SurfaceMesh& out) {
+  if (!(r.len_u > 0.0) || !(r.len_v > 0.0)) return;
+  Vec3 a = r.len_u * r.u, b = r.len_v * r.v;
+  if (a.cross(b).dot(r.normal) < 0.0) std::swap(a, b);
+  out.addQuad(r.corner, r.corner + a, r.corner + a + b, r.corner + b);
+}
+
+/// The face of the box [lo, hi] whose outward normal is `sign` * e_axis.
+Rectangle boxFace(const Vec3& lo, const Vec3& hi, int axis, double sign) {
   const int a = (axis + 1) % 3;
   const int b = (axis + 2) % 3;
   Vec3 corner = lo;
   corner[axis] = sign > 0.0 ? hi[axis] : lo[axis];
-  const Vec3 normal = sign * Vec3::Unit(axis);
-  sampleRectangle(corner, Vec3::Unit(a), hi[a] - lo[a], Vec3::Unit(b), hi[b] - lo[b], normal,
-                  spacing, radius, out);
+  return Rectangle{corner,        Vec3::Unit(a), hi[a] - lo[a], Vec3::Unit(b),
+                   hi[b] - lo[b], sign * Vec3::Unit(axis)};
 }
 
-/// Samples all six faces of the box [lo, hi] (outward normals).
-void sampleBoxSurface(const Vec3& lo, const Vec3& hi, double spacing, double radius,
-                      SurfaceSamples& out) {
+/// All six faces of the box [lo, hi] (outward normals).
+std::vector<Rectangle> boxFaces(const Vec3& lo, const Vec3& hi) {
+  std::vector<Rectangle> faces;
   for (int axis = 0; axis < 3; ++axis) {
-    sampleBoxFace(lo, hi, axis, -1.0, spacing, radius, out);
-    sampleBoxFace(lo, hi, axis, +1.0, spacing, radius, out);
+    faces.push_back(boxFace(lo, hi, axis, -1.0));
+    faces.push_back(boxFace(lo, hi, axis, +1.0));
   }
+  return faces;
+}
+
+void sampleRectangles(const std::vector<Rectangle>& faces, double spacing, double radius,
+                      SurfaceSamples& out) {
+  for (const Rectangle& r : faces)
+    sampleRectangle(r, spacing, radius, out);
+}
+
+void meshRectangles(const std::vector<Rectangle>& faces, SurfaceMesh& out) {
+  for (const Rectangle& r : faces)
+    meshRectangle(r, out);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -93,7 +121,12 @@ class BoxShape final : public Shape {
 
   void sample(double spacing, double radius, const Aabb&, SurfaceSamples& out) const override {
     checkSampling(spacing, radius);
-    sampleBoxSurface(-half_, half_, spacing, radius, out);
+    sampleRectangles(boxFaces(-half_, half_), spacing, radius, out);
+  }
+
+  bool triangulate(const Aabb&, SurfaceMesh& out) const override {
+    meshRectangles(boxFaces(-half_, half_), out);
+    return true;
   }
 
   double volume() const override { return 8.0 * half_.prod(); }
@@ -168,7 +201,27 @@ class PlaneShape final : public Shape {
   /// Samples the rectangle of the plane covering the orthogonal projection of `clip`.
   void sample(double spacing, double radius, const Aabb& clip, SurfaceSamples& out) const override {
     checkSampling(spacing, radius);
-    if (clip.empty() || !isFinite(clip.min) || !isFinite(clip.max)) return;
+    if (const auto r = rectangle(clip)) sampleRectangle(*r, spacing, radius, out);
+  }
+
+  /// The same rectangle as two triangles.
+  bool triangulate(const Aabb& clip, SurfaceMesh& out) const override {
+    if (const auto r = rectangle(clip)) meshRectangle(*r, out);
+    return true;
+  }
+
+  double volume() const override { return std::numeric_limits<double>::infinity(); }
+
+ private:
+  Vec3 normal_;     ///< unit outward normal (points out of the solid)
+  double offset_;   ///< m, solid is normal . p < offset
+  Vec3 tangent_u_;  ///< unit, orthogonal to normal_
+  Vec3 tangent_v_;  ///< unit, normal_ x tangent_u_
+
+  /// The rectangle of the plane covering the orthogonal projection of `clip` (none for an
+  /// empty or infinite clip).
+  std::optional<Rectangle> rectangle(const Aabb& clip) const {
+    if (clip.empty() || !isFinite(clip.min) || !isFinite(clip.max)) return std::nullopt;
     const Vec3 origin = offset_ * normal_;  // m, foot of the plane from the body origin
     double u_lo = std::numeric_limits<double>::infinity(), u_hi = -u_lo;
     double v_lo = u_lo, v_hi = -u_lo;
@@ -183,17 +236,9 @@ class PlaneShape final : public Shape {
       v_lo = std::min(v_lo, v);
       v_hi = std::max(v_hi, v);
     }
-    sampleRectangle(origin + u_lo * tangent_u_ + v_lo * tangent_v_, tangent_u_, u_hi - u_lo,
-                    tangent_v_, v_hi - v_lo, normal_, spacing, radius, out);
+    return Rectangle{origin + u_lo * tangent_u_ + v_lo * tangent_v_, tangent_u_, u_hi - u_lo,
+                     tangent_v_, v_hi - v_lo, normal_};
   }
-
-  double volume() const override { return std::numeric_limits<double>::infinity(); }
-
- private:
-  Vec3 normal_;     ///< unit outward normal (points out of the solid)
-  double offset_;   ///< m, solid is normal . p < offset
-  Vec3 tangent_u_;  ///< unit, orthogonal to normal_
-  Vec3 tangent_v_;  ///< unit, normal_ x tangent_u_
 };
 
 /// Open-top tank.  The solid is the outer box
@@ -234,38 +279,14 @@ class TankShape final : public Shape {
 
   Aabb bounds(const Aabb&) const override { return Aabb{outer_min_, outer_max_}; }
 
-  /// 5 inner faces (floor top, 4 inner walls), 5 outer faces (bottom, 4 outer walls) and
-  /// the top rim as 4 strips of width t.
   void sample(double spacing, double radius, const Aabb&, SurfaceSamples& out) const override {
     checkSampling(spacing, radius);
-    const Vec3 ex = Vec3::UnitX(), ey = Vec3::UnitY(), ez = Vec3::UnitZ();
-    const Vec3 size = max_ - min_;               // m, cavity size
-    const Vec3 outer = outer_max_ - outer_min_;  // m, outer box size
+    sampleRectangles(faces(), spacing, radius, out);
+  }
 
-    // Outer faces: the outer box's bottom and four sides (its top is rim + opening).
-    for (int axis = 0; axis < 3; ++axis) {
-      sampleBoxFace(outer_min_, outer_max_, axis, -1.0, spacing, radius, out);
-      if (axis != 1) sampleBoxFace(outer_min_, outer_max_, axis, +1.0, spacing, radius, out);
-    }
-    // Inner faces: floor top (normal +y) and the 4 inner walls (normals into the cavity).
-    sampleRectangle(min_, ez, size.z(), ex, size.x(), ey, spacing, radius, out);
-    sampleRectangle(min_, ey, size.y(), ez, size.z(), ex, spacing, radius, out);
-    sampleRectangle(Vec3(max_.x(), min_.y(), min_.z()), ez, size.z(), ey, size.y(), -ex, spacing,
-                    radius, out);
-    sampleRectangle(min_, ex, size.x(), ey, size.y(), ez, spacing, radius, out);
-    sampleRectangle(Vec3(min_.x(), min_.y(), max_.z()), ey, size.y(), ex, size.x(), -ez, spacing,
-                    radius, out);
-
-    // Top rim (y = max.y, normal +y): two full-length strips along x at the -z and +z sides,
-    // two short strips along z at the -x and +x sides.
-    const double top = max_.y();
-    sampleRectangle(Vec3(outer_min_.x(), top, outer_min_.z()), ez, t_, ex, outer.x(), ey, spacing,
-                    radius, out);
-    sampleRectangle(Vec3(outer_min_.x(), top, max_.z()), ez, t_, ex, outer.x(), ey, spacing, radius,
-                    out);
-    sampleRectangle(Vec3(outer_min_.x(), top, min_.z()), ez, size.z(), ex, t_, ey, spacing, radius,
-                    out);
-    sampleRectangle(Vec3(max_.x(), top, min_.z()), ez, size.z(), ex, t_, ey, spacing, radius, out);
+  bool triangulate(const Aabb&, SurfaceMesh& out) const override {
+    meshRectangles(faces(), out);
+    return true;
   }
 
   /// Walls and floor: the outer box less the cavity below the rim.
@@ -277,9 +298,58 @@ class TankShape final : public Shape {
   Vec3 outer_min_;  ///< m, outer box corners
   Vec3 outer_max_;
   Vec3 cavity_max_;  ///< m, max_ with y = +inf (the cavity is open above)
+
+  /// 5 outer faces (bottom, 4 outer walls), 5 inner faces (floor top, 4 inner walls) and
+  /// the top rim as 4 strips of width t.
+  std::vector<Rectangle> faces() const {
+    const Vec3 ex = Vec3::UnitX(), ey = Vec3::UnitY(), ez = Vec3::UnitZ();
+    const Vec3 size = max_ - min_;               // m, cavity size
+    const Vec3 outer = outer_max_ - outer_min_;  // m, outer box size
+    std::vector<Rectangle> f;
+    // Outer faces: the outer box's bottom and four sides (its top is rim + opening).
+    for (int axis = 0; axis < 3; ++axis) {
+      f.push_back(boxFace(outer_min_, outer_max_, axis, -1.0));
+      if (axis != 1) f.push_back(boxFace(outer_min_, outer_max_, axis, +1.0));
+    }
+    // Inner faces: floor top (normal +y) and the 4 inner walls (normals into the cavity).
+    f.push_back(Rectangle{min_, ez, size.z(), ex, size.x(), ey});
+    f.push_back(Rectangle{min_, ey, size.y(), ez, size.z(), ex});
+    f.push_back(Rectangle{Vec3(max_.x(), min_.y(), min_.z()), ez, size.z(), ey, size.y(), -ex});
+    f.push_back(Rectangle{min_, ex, size.x(), ey, size.y(), ez});
+    f.push_back(Rectangle{Vec3(min_.x(), min_.y(), max_.z()), ey, size.y(), ex, size.x(), -ez});
+    // Top rim (y = max.y, normal +y): two full-length strips along x at the -z and +z sides,
+    // two short strips along z at the -x and +x sides.
+    const double top = max_.y();
+    f.push_back(Rectangle{Vec3(outer_min_.x(), top, outer_min_.z()), ez, t_, ex, outer.x(), ey});
+    f.push_back(Rectangle{Vec3(outer_min_.x(), top, max_.z()), ez, t_, ex, outer.x(), ey});
+    f.push_back(Rectangle{Vec3(outer_min_.x(), top, min_.z()), ez, size.z(), ex, t_, ey});
+    f.push_back(Rectangle{Vec3(max_.x(), top, min_.z()), ez, size.z(), ex, t_, ey});
+    return f;
+  }
 };
 
 }  // namespace
+
+void SurfaceMesh::addTriangle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const auto first = static_cast<std::uint32_t>(vertices.size());
+  vertices.insert(vertices.end(), {a, b, c});
+  triangles.push_back({first, first + 1, first + 2});
+}
+
+void SurfaceMesh::addQuad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const auto first = static_cast<std::uint32_t>(vertices.size());
+  vertices.insert(vertices.end(), {a, b, c, d});
+  triangles.push_back({first, first + 1, first + 2});
+  triangles.push_back({first, first + 2, first + 3});
+}
+
+void SurfaceMesh::append(const SurfaceMesh& other, const Pose& pose) {
+  const auto first = static_cast<std::uint32_t>(vertices.size());
+  for (const Vec3& v : other.vertices)
+    vertices.push_back(pose.toWorld(v));
+  for (const auto& t : other.triangles)
+    triangles.push_back({first + t[0], first + t[1], first + t[2]});
+}
 
 std::unique_ptr<Shape> makeBox(const Vec3& half_extents) {
   if (!isFinite(half_extents) || (half_extents.array() <= 0.0).any())

@@ -96,6 +96,11 @@ class RoundedShape final : public Shape {
     return b;
   }
 
+  /// Exact only without a margin (the convex shape itself).
+  bool triangulate(const Aabb& clip, SurfaceMesh& out) const override {
+    return margin_ == 0.0 && inner_->triangulate(clip, out);
+  }
+
   /// sampleSurfaceBySdf; with Steiner data, the areas are scaled to add up to the exact
   /// surface area.
   void sample(double spacing, double radius, const Aabb&, SurfaceSamples& out) const override {
@@ -180,6 +185,19 @@ class CompoundShape final : public Shape {
         out.area.push_back(s.area[k]);
       }
     }
+  }
+
+  /// The children's triangles placed by their poses (faces inside other children stay):
+  /// exact when every child is.
+  bool triangulate(const Aabb& clip, SurfaceMesh& out) const override {
+    SurfaceMesh all;
+    for (const CompoundChild& c : children_) {
+      SurfaceMesh part;
+      if (!c.shape->triangulate(transformBounds(clip, c.pose, false), part)) return false;
+      all.append(part, c.pose);
+    }
+    out.append(all, Pose());
+    return true;
   }
 
   /// Sum of the children's volumes, less for each child i the volume it shares with the
