@@ -4,6 +4,8 @@
 #include "io/files.hpp"
 #include "io/hdf5_writer.hpp"
 #include "io/scene.hpp"
+#include "io/xdmf.hpp"
+#include "surface/shape_mesh.hpp"
 
 #include <hdf5.h>
 #include <unistd.h>
@@ -11,8 +13,6 @@
 #include <array>
 #include <cstdint>
 #include <cstdio>
-#include <iomanip>
-#include <sstream>
 #include <stdexcept>
 #include <vector>
 
@@ -24,35 +24,6 @@ using hdf5::QuietHdf5Errors;
 
 static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 arrays are written as N x 3 doubles");
 
-std::string frameName(std::size_t k) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%06zu", k);
-  return buf;
-}
-
-std::string xmlEscape(const std::string& s) {
-  std::string out;
-  for (const char c : s) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
 std::string fileName(const std::string& path) {
   const auto slash = path.find_last_of('/');
   return slash == std::string::npos ? path : path.substr(slash + 1);
@@ -63,11 +34,12 @@ struct BodySeries {
   Handle group, time, position, orientation, linear_velocity, angular_velocity;
 };
 
-/// One output frame as the XDMF index lists it.
-struct FrameEntry {
-  std::size_t index;
-  double time;        ///< s
-  std::size_t count;  ///< fluid particles
+/// One body's triangle mesh (body frame), written once; moving bodies' world vertices
+/// are written with every frame.
+struct BodyMesh {
+  std::string name;
+  SurfaceMesh mesh;
+  bool moves = false;
 };
 
 }  // namespace
@@ -76,7 +48,10 @@ struct FrameWriter::Impl : hdf5::Writer {
   std::string h5_final, h5_partial, xdmf_final, xdmf_partial;
   Handle file, frames_group, bodies_group;
   std::vector<BodySeries> bodies;  // in the order of sim.bodyStates()
-  std::vector<FrameEntry> entries;
+  std::vector<BodyMesh> meshes;     // in the order of sim.bodyStates()
+  std::vector<XdmfFrame> entries;  // what the XDMF index lists
+  Handle particle_index;           // /particle_index: 0, 1, 2, ... (the fluid's cell)
+  hsize_t particle_index_size = 0;
   OutputIndex index;
   bool finished = false;
 
@@ -120,7 +95,94 @@ struct FrameWriter::Impl : hdf5::Writer {
       bodies.push_back(std::move(s));
     }
     writeSurfaces(sim);
+    writeMeshes(sim);
+    particle_index = createIndexSeries(root, "particle_index");
+    growParticleIndex(sim.fluidParticles());
     check(H5Fflush(root, H5F_SCOPE_GLOBAL), "flush the file");
+  }
+
+  /// An empty 1-D uint32 dataset that grows (chunks of 64k).
+  Handle createIndexSeries(hid_t group, const char* name) const {
+    const hsize_t dims[1] = {0}, max_dims[1] = {H5S_UNLIMITED}, chunk[1] = {65536};
+    const Handle space = create(H5Screate_simple(1, dims, max_dims), H5Sclose, "create dataspace");
+    const Handle props = create(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "create properties");
+    check(H5Pset_chunk(props.get(), 1, chunk), "set chunk size");
+    return create(H5Dcreate2(group, name, H5T_NATIVE_UINT32, space.get(), H5P_DEFAULT, props.get(),
+                             H5P_DEFAULT),
+                  H5Dclose, std::string("create dataset ") + name);
+  }
+
+  /// Makes /particle_index hold 0 .. n-1 (it only grows).
+  void growParticleIndex(hsize_t n) {
+    if (n <= particle_index_size) return;
+    const hsize_t dims[1] = {n};
+    check(H5Dset_extent(particle_index.get(), dims), "extend /particle_index");
+    const Handle file_space = create(H5Dget_space(particle_index.get()), H5Sclose, "get dataspace");
+    const hsize_t start[1] = {particle_index_size}, count[1] = {n - particle_index_size};
+    check(H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr),
+          "select /particle_index rows");
+    std::vector<std::uint32_t> values(count[0]);
+    for (hsize_t i = 0; i < count[0]; ++i)
+      values[i] = static_cast<std::uint32_t>(start[0] + i);
+    const Handle memory_space =
+        create(H5Screate_simple(1, count, nullptr), H5Sclose, "create dataspace");
+    check(H5Dwrite(particle_index.get(), H5T_NATIVE_UINT32, memory_space.get(), file_space.get(),
+                   H5P_DEFAULT, values.data()),
+          "write /particle_index");
+    particle_index_size = n;
+  }
+
+  /// Each body's shape as a triangle mesh in its body frame (mesh_vertices, mesh_triangles;
+  /// infinite shapes within the domain); static bodies' world vertices once (mesh_world,
+  /// float), moving bodies' with every frame.
+  void writeMeshes(const Simulation& sim) {
+    const Boundaries& boundaries = sim.boundaries();
+    meshes.clear();
+    for (std::size_t b = 0; b < boundaries.bodyCount() && b < bodies.size(); ++b) {
+      const BodySettings& body = boundaries.body(b);
+      BodyMesh m;
+      m.name = body.name;
+      m.moves = body.moves();
+      m.mesh = shapeMesh(*body.shape, transformBounds(sim.model().domain, body.pose, false));
+      const hid_t group = bodies[b].group.get();
+      writeDataset(group, "mesh_vertices", H5T_NATIVE_DOUBLE, m.mesh.vertices.data(),
+                   m.mesh.vertices.size(), 3);
+      writeDataset(group, "mesh_triangles", H5T_NATIVE_UINT32, m.mesh.triangles.data(),
+                   m.mesh.triangles.size(), 3);
+      if (!m.moves) writeWorldVertices(group, "mesh_world", m.mesh, body.pose);
+      meshes.push_back(std::move(m));
+    }
+  }
+
+  void writeWorldVertices(hid_t group, const char* name, const SurfaceMesh& mesh,
+                          const Pose& pose) const {
+    std::vector<float> xyz;
+    xyz.reserve(3 * mesh.vertices.size());
+    for (const Vec3& v : mesh.vertices) {
+      const Vec3 w = pose.toWorld(v);
+      xyz.insert(xyz.end(), {static_cast<float>(w.x()), static_cast<float>(w.y()),
+                             static_cast<float>(w.z())});
+    }
+    writeDataset(group, name, H5T_NATIVE_FLOAT, xyz.data(), mesh.vertices.size(), 3);
+  }
+
+  /// The XDMF entry of frame k: the fluid and every body's mesh.
+  XdmfFrame entry(std::size_t k, double time, std::size_t particles) const {
+    XdmfFrame f{k, time, particles, {}};
+    const std::string h5 = fileName(h5_final);
+    for (const BodyMesh& m : meshes)
+      f.meshes.push_back(bodyMeshEntry(h5, m.name, m.moves, k, m.mesh.vertices.size(),
+                                       m.mesh.triangles.size()));
+    return f;
+  }
+
+  /// The XDMF index of all frames so far, its data in the HDF5 file `h5_name` (relative).
+  std::string xdmf(const std::string& h5_name) const {
+    XdmfRun run{h5_name, particle_index_size, entries};
+    for (XdmfFrame& f : run.frames)
+      for (XdmfMesh& m : f.meshes)
+        m.file = h5_name;
+    return xdmfIndex(run);
   }
 
   /// Appends frame k's body rows (bodies x OutputIndex::kBodyRow numbers) to the body
@@ -167,48 +229,6 @@ struct FrameWriter::Impl : hdf5::Writer {
     }
   }
 
-  /// The XDMF index of all frames so far, its data in the HDF5 file `h5_name` (relative).
-  std::string xdmf(const std::string& h5_name) const {
-    std::ostringstream x;
-    x << std::setprecision(12);
-    const std::string h5 = xmlEscape(h5_name);
-    auto item = [&](std::size_t n, int cols, const char* type, int bytes, const std::string& path) {
-      x << "          <DataItem Dimensions=\"" << n << (cols > 1 ? " 3" : "") << "\" NumberType=\""
-        << type << "\" Precision=\"" << bytes << "\" Format=\"HDF\">" << h5 << ":" << path
-        << "</DataItem>\n";
-    };
-    x << "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
-      << "<Xdmf Version=\"2.0\">\n  <Domain>\n"
-      << "    <Grid Name=\"fluid\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
-    for (const FrameEntry& e : entries) {
-      const std::string group = "/frames/" + frameName(e.index) + "/";
-      x << "      <Grid Name=\"frame_" << frameName(e.index) << "\" GridType=\"Uniform\">\n"
-        << "        <Time Value=\"" << e.time << "\"/>\n"
-        << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << e.count
-        << "\" NodesPerElement=\"1\"/>\n"
-        << "        <Geometry GeometryType=\"XYZ\">\n";
-      item(e.count, 3, "Float", 8, group + "position");
-      x << "        </Geometry>\n";
-      struct Field {
-        const char* name;
-        const char* kind;
-        int cols;
-        const char* type;
-        int bytes;
-      };
-      for (const Field& f :
-           {Field{"velocity", "Vector", 3, "Float", 8}, Field{"density", "Scalar", 1, "Float", 8},
-            Field{"pressure", "Scalar", 1, "Float", 8}, Field{"id", "Scalar", 1, "UInt", 4}}) {
-        x << "        <Attribute Name=\"" << f.name << "\" AttributeType=\"" << f.kind
-          << "\" Center=\"Node\">\n";
-        item(e.count, f.cols, f.type, f.bytes, group + f.name);
-        x << "        </Attribute>\n";
-      }
-      x << "      </Grid>\n";
-    }
-    x << "    </Grid>\n  </Domain>\n</Xdmf>\n";
-    return x.str();
-  }
 };
 
 FrameWriter::FrameWriter(const std::string& out_dir, const SceneFile& scene, const Simulation& sim)
@@ -258,7 +278,8 @@ FrameWriter::FrameWriter(const std::string& out_dir, const SceneFile& scene, con
     const double time = d.readAttribute<double>(group.get(), "time", H5T_NATIVE_DOUBLE);
     const std::vector<std::uint32_t> id =
         d.readDataset<std::uint32_t>(group.get(), "id", H5T_NATIVE_UINT32, 1);
-    d.entries.push_back(FrameEntry{k, time, id.size()});
+    d.entries.push_back(d.entry(k, time, id.size()));
+    d.growParticleIndex(id.size());
     d.appendBodyRows(k, &index.body_rows[k * nb * OutputIndex::kBodyRow]);
     d.index.frame_address.push_back(d.addressOf(group.get()));
   }
@@ -301,6 +322,17 @@ void FrameWriter::writeFrame(const Simulation& sim, const FluidSnapshot& fluid) 
   const std::vector<BodyState> states = sim.bodyStates();
   if (states.size() != d.bodies.size())
     throw std::logic_error("FrameWriter: the number of bodies changed during the run");
+  d.growParticleIndex(n);
+  bool any_moves = false;
+  for (const BodyMesh& m : d.meshes)
+    any_moves = any_moves || m.moves;
+  if (any_moves) {
+    const Handle meshes = d.createGroup(group.get(), "bodies");
+    for (std::size_t b = 0; b < d.meshes.size(); ++b)
+      if (d.meshes[b].moves)
+        d.writeWorldVertices(meshes.get(), d.meshes[b].name.c_str(), d.meshes[b].mesh,
+                             Pose{states[b].position, states[b].orientation});
+  }
   std::vector<double> rows;
   for (const BodyState& b : states) {
     const std::array<double, OutputIndex::kBodyRow> row = {time,
@@ -323,7 +355,7 @@ void FrameWriter::writeFrame(const Simulation& sim, const FluidSnapshot& fluid) 
   d.check(H5Fflush(d.file.get(), H5F_SCOPE_GLOBAL), "flush the file");
   d.index.frame_address.push_back(d.addressOf(group.get()));
 
-  d.entries.push_back(FrameEntry{k, time, static_cast<std::size_t>(n)});
+  d.entries.push_back(d.entry(k, time, static_cast<std::size_t>(n)));
   writeFileAtomically(d.xdmf_partial, d.xdmf(fileName(d.h5_partial)));
 }
 
@@ -332,6 +364,7 @@ void FrameWriter::finish() {
   Impl& d = *impl_;
   if (d.finished) return;
   d.bodies.clear();
+  d.particle_index.reset();
   d.bodies_group.reset();
   d.frames_group.reset();
   d.check(H5Fclose(d.file.release()), "close the file");

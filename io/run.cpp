@@ -3,6 +3,7 @@
 #include "bullet_bridge/scene_world.hpp"
 #include "io/checkpoint.hpp"
 #include "io/output.hpp"
+#include "io/progress.hpp"
 #include "io/series.hpp"
 #include "io/summary.hpp"
 
@@ -28,43 +29,22 @@ double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-/// "0:12", "12:34" or "1:02:03"; "--:--" when unknown.
-std::string formatDuration(double seconds) {
-  if (!std::isfinite(seconds) || seconds < 0) return "--:--";
-  const long s = std::lround(seconds);
-  char buf[32];
-  if (s >= 3600)
-    std::snprintf(buf, sizeof(buf), "%ld:%02ld:%02ld", s / 3600, (s / 60) % 60, s % 60);
-  else
-    std::snprintf(buf, sizeof(buf), "%ld:%02ld", s / 60, s % 60);
-  return buf;
-}
-
-/// Progress report: one updating line on a terminal, else at most one log line per
-/// second (and always the last frame); nothing when quiet.
+/// Progress of a run: frame, simulated time, steps per second, time left.
 class Progress {
  public:
   Progress(const RunOptions& options, std::size_t last_frame, double end_time)
-      : out_(options.quiet ? nullptr
-             : options.log ? options.log
-                           : &std::cerr),
-        interactive_(options.interactive),
+      : line_(options.quiet ? nullptr
+              : options.log ? options.log
+                            : &std::cerr,
+              options.interactive),
         last_frame_(last_frame),
         end_time_(end_time) {}
 
-  void message(const std::string& line) {
-    if (!out_) return;
-    if (interactive_ && line_width_ > 0) *out_ << "\r" << std::string(line_width_, ' ') << "\r";
-    line_width_ = 0;
-    *out_ << "[wake] " << line << std::endl;
-  }
+  void message(const std::string& text) { line_.message(text); }
 
   void frame(std::size_t k, const Simulation& sim) {
-    if (!out_) return;
-    const double elapsed = secondsSince(start_);
-    const bool last = k == last_frame_;
-    if (!interactive_ && !last && k > 0 && elapsed - last_print_ < 1.0) return;
-    last_print_ = elapsed;
+    if (line_.silent()) return;
+    const double elapsed = line_.elapsed();
     const double t = sim.time();
     if (k == first_frame_) {
       first_steps_ = sim.steps();
@@ -75,36 +55,21 @@ class Progress {
     char buf[160];
     std::snprintf(buf, sizeof(buf), "[wake] frame %zu/%zu  t=%.3f/%.3f s  %.0f steps/s  ETA %s", k,
                   last_frame_, t, end_time_, steps_per_second, formatDuration(eta).c_str());
-    const std::string line = buf;
-    if (interactive_) {
-      // Pad over a longer previous line; the final newline comes with the last frame.
-      const std::size_t pad = line_width_ > line.size() ? line_width_ - line.size() : 0;
-      *out_ << "\r" << line << std::string(pad, ' ') << (last ? "\n" : "") << std::flush;
-      line_width_ = last ? 0 : line.size();
-    } else {
-      *out_ << line << std::endl;
-    }
+    line_.update(buf, k == last_frame_);
   }
 
   /// Ends an unfinished updating line (before an error message is printed).
-  void abandon() {
-    if (out_ && interactive_ && line_width_ > 0) *out_ << std::endl;
-    line_width_ = 0;
-  }
+  void abandon() { line_.abandon(); }
+
+  void startAt(std::size_t frame) { first_frame_ = frame; }
 
  private:
-  std::ostream* out_;
-  bool interactive_;
+  ProgressLine line_;
   std::size_t last_frame_;
   double end_time_;
-  Clock::time_point start_ = Clock::now();
-  double last_print_ = -1.0;
-  std::size_t line_width_ = 0;
   std::size_t first_frame_ = 0;    // the first frame this process writes (resumed runs: later)
   std::uint64_t first_steps_ = 0;  // the steps taken before it
   double first_time_ = 0;          // s, its time
- public:
-  void startAt(std::size_t frame) { first_frame_ = frame; }
 };
 
 /// Creates the output folder; an existing file of that name is bad input.

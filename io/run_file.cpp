@@ -74,6 +74,42 @@ void RunFile::readFrame(std::size_t k, RunFrame& out, bool positions, bool veloc
   if (velocities) readRows(group.get(), "velocity", 3, name, out.velocity);
 }
 
+std::size_t RunFile::datasetRows(const char* path) const {
+  if (H5Lexists(file_.get(), path, H5P_DEFAULT) <= 0) return 0;
+  const Handle set(H5Dopen2(file_.get(), path, H5P_DEFAULT), H5Dclose);
+  if (!set.valid()) fail(std::string("open dataset ") + path);
+  const Handle space(H5Dget_space(set.get()), H5Sclose);
+  hsize_t dims[2] = {0, 0};
+  if (!space.valid() || H5Sget_simple_extent_ndims(space.get()) < 1 ||
+      H5Sget_simple_extent_dims(space.get(), dims, nullptr) < 0)
+    fail(std::string("read the shape of ") + path);
+  return static_cast<std::size_t>(dims[0]);
+}
+
+std::pair<double, std::size_t> RunFile::frameInfo(std::size_t k) const {
+  char name[48];
+  std::snprintf(name, sizeof(name), "/frames/%06zu", k);
+  const Handle group(H5Gopen2(file_.get(), name, H5P_DEFAULT), H5Gclose);
+  if (!group.valid()) fail(std::string("open ") + name);
+  double time = 0.0;
+  const Handle attr(H5Aopen(group.get(), "time", H5P_DEFAULT), H5Aclose);
+  if (!attr.valid() || H5Aread(attr.get(), H5T_NATIVE_DOUBLE, &time) < 0)
+    fail(std::string("read ") + name + " attribute time");
+  return {time, datasetRows((std::string(name) + "/id").c_str())};
+}
+
+void RunFile::readScalars(std::size_t k, RunFrame& out) const {
+  char name[48];
+  std::snprintf(name, sizeof(name), "frames/%06zu", k);
+  const Handle group(H5Gopen2(file_.get(), name, H5P_DEFAULT), H5Gclose);
+  if (!group.valid()) fail(std::string("open /") + name);
+  out.time = frameInfo(k).first;
+  readFlat(group.get(), "density", 1, name, out.density);
+  std::vector<double> id;
+  readFlat(group.get(), "id", 1, name, id);
+  out.id.assign(id.begin(), id.end());
+}
+
 std::vector<RunBody> RunFile::readBodies() const {
   std::vector<RunBody> out;
   if (H5Lexists(file_.get(), "bodies", H5P_DEFAULT) <= 0) return out;
@@ -102,6 +138,19 @@ std::vector<RunBody> RunFile::readBodies() const {
       if (b.normals.size() != b.points.size())
         fail("match /" + where + "/surface_normals to surface_points");
     }
+    if (H5Lexists(group.get(), "mesh_vertices", H5P_DEFAULT) > 0) {
+      readRows(group.get(), "mesh_vertices", 3, where, b.mesh.vertices);
+      std::vector<double> t;
+      readFlat(group.get(), "mesh_triangles", 3, where, t);
+      for (std::size_t f = 0; f + 2 < t.size(); f += 3) {
+        const std::array<std::uint32_t, 3> tri = {static_cast<std::uint32_t>(t[f]),
+                                                   static_cast<std::uint32_t>(t[f + 1]),
+                                                   static_cast<std::uint32_t>(t[f + 2])};
+        for (const std::uint32_t v : tri)
+          if (v >= b.mesh.vertices.size()) fail("read /" + where + "/mesh_triangles (bad index)");
+        b.mesh.triangles.push_back(tri);
+      }
+    }
     readRows(group.get(), "position", 3, where, b.position);
     std::vector<double> xyzw;
     readFlat(group.get(), "orientation", 4, where, xyzw);
@@ -126,7 +175,7 @@ void RunFile::readFlat(hid_t group, const char* name, hsize_t cols, const std::s
   const int rank = space.valid() ? H5Sget_simple_extent_ndims(space.get()) : -1;
   if (rank < 1 || rank > 2) fail("read dataset " + full + " (unexpected shape)");
   H5Sget_simple_extent_dims(space.get(), dims, nullptr);
-  if (rank == 2 ? dims[1] != cols : (dims[0] != 0 || cols != 1))
+  if (rank == 2 ? dims[1] != cols : (dims[0] != 0 && cols != 1))
     fail("read dataset " + full + " (expected " + std::to_string(cols) + " columns)");
   out.assign(static_cast<std::size_t>(dims[0] * cols), 0.0);
   if (!out.empty() &&

@@ -3,11 +3,14 @@
 // `wake render` (render/); HDF5 is not thread-safe, so one RunFile is read on one thread.
 #pragma once
 
+#include "geometry/shape.hpp"
 #include "io/hdf5_handle.hpp"
 #include "sph/types.hpp"
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace wake {
@@ -18,6 +21,7 @@ struct RunBody {
   std::vector<Vec3> points, normals;  ///< body frame
   std::vector<Vec3> position;         ///< per frame
   std::vector<Quat> orientation;      ///< per frame
+  SurfaceMesh mesh;                   ///< body frame; empty in files without mesh_vertices
   /// The pose at frame `frame` (the last one past the end; identity without a series).
   Pose pose(std::size_t frame) const;
 };
@@ -25,7 +29,10 @@ struct RunBody {
 /// The particles of one frame, in id order.
 struct RunFrame {
   std::size_t index = 0;
+  double time = 0.0;  ///< s (read by readScalars)
   std::vector<Vec3> position, velocity;
+  std::vector<double> density;     ///< kg/m^3 (read by readScalars)
+  std::vector<std::uint32_t> id;   ///< (read by readScalars)
 };
 
 class RunFile {
@@ -35,11 +42,19 @@ class RunFile {
 
   /// A double attribute of the root (`fallback` when it is missing).
   double rootDouble(const char* name, double fallback) const;
+  /// A string attribute of the root ("" when missing).
+  std::string rootString(const char* name) const { return stringAttribute(file_.get(), name); }
   /// A string attribute of `object` (fixed or variable length); "" when missing.
   static std::string stringAttribute(hid_t object, const char* name);
   std::size_t frameCount() const;
   /// Frame k's positions and/or velocities into `out`.
   void readFrame(std::size_t k, RunFrame& out, bool positions, bool velocities) const;
+  /// Frame k's time (s) and number of particles.
+  std::pair<double, std::size_t> frameInfo(std::size_t k) const;
+  /// Rows of the dataset at `path` (0 when it is missing).
+  std::size_t datasetRows(const char* path) const;
+  /// Frame k's time, densities and ids into `out`.
+  void readScalars(std::size_t k, RunFrame& out) const;
   std::vector<RunBody> readBodies() const;
 
  private:

@@ -6,12 +6,17 @@
 //   wake render DIR [--out FRAMES_DIR] [--scene NAME] [--color speed|depth] [--width W]
 //               [--height H] [--view iso|front|side|top] [--frames A:B|K] [--every N]
 //               [--max-speed V] [--video] [--quiet] [--threads N]
+//   wake surface DIR [--radius-factor F] [--voxel-factor F] [--smoothing N]
+//                [--adaptivity A] [--obj] [--no-vdb] [--scene NAME] [--quiet] [--threads N]
+//   wake export DIR [--scene NAME] [--quiet]
+//   (wake run --surface takes the surface options too and surfaces the run when it ends)
 //
 // Exit status: 0 success, 2 bad input (scene, options), 1 a run that failed.
 // Every error is one line on stderr: "wake: error: <message>".
 #include "io/files.hpp"
 #include "io/run.hpp"
 #include "io/scene.hpp"
+#include "io/surfaces.hpp"
 #include "render/render.hpp"
 
 #include <omp.h>
@@ -54,13 +59,32 @@ int guarded(F&& body) {
   }
 }
 
+/// The options of the fluid's surface (`wake surface`, `wake run --surface`).
+void addSurfaceOptions(CLI::App* app, wake::SurfaceOptions& o) {
+  const wake::SurfaceSettings d;
+  app->add_option("--radius-factor", o.settings.radius_factor,
+                  "Sphere radius per particle / particle radius, [1.5, 4] (default " +
+                      std::to_string(d.radius_factor).substr(0, 3) + ")");
+  app->add_option("--voxel-factor", o.settings.voxel_factor,
+                  "Voxel size / particle radius, [0.1, radius-factor / 1.5] (default " +
+                      std::to_string(d.voxel_factor).substr(0, 3) + ")");
+  app->add_option("--smoothing", o.settings.smoothing,
+                  "Gaussian smoothing passes, [0, 20] (default " + std::to_string(d.smoothing) +
+                      ")");
+  app->add_option("--adaptivity", o.settings.adaptivity,
+                  "Mesh adaptivity, [0, 1]: 0 uniform, higher fewer triangles (default 0)");
+  app->add_flag("--obj", o.obj, "Also write the fluid's meshes as OBJ");
+  app->add_flag("--no-vdb{false}", o.vdb, "Do not write the level sets (.vdb)");
+}
+
 /// `wake run`: a scene headless, or --resume a stopped run.
 struct RunCommand {
   CLI::App* app = nullptr;
   std::string scene_path, out_dir, resume_dir;
-  bool quiet = false;
+  bool quiet = false, surface = false;
   int threads = 0;
   double end_time = 0.0, resolution = 1.0, checkpoint_every = 0.0;
+  wake::SurfaceOptions surface_options;
   CLI::Option *scene = nullptr, *out = nullptr, *resume = nullptr, *checkpoint = nullptr,
               *threads_option = nullptr, *end = nullptr, *resolution_option = nullptr;
 
@@ -83,6 +107,21 @@ struct RunCommand {
     resolution_option = app->add_option(
         "--resolution", resolution,
         "Refinement factor F > 0: particle_radius / F, about F^3 times the particles");
+    app->add_flag("--surface", surface,
+                  "When the run ends, write the fluid's surfaces as wake surface DIR does");
+    addSurfaceOptions(app, surface_options);
+  }
+
+  /// wake surface DIR after the run, with the run's progress settings.
+  void surfaceAfter(const wake::RunOptions& run_options) const {
+    if (!surface) return;
+    wake::SurfaceOptions o = surface_options;
+    o.dir = run_options.out_dir;
+    o.quiet = run_options.quiet;
+    o.interactive = run_options.interactive;
+    o.log = run_options.log;
+    o.threads = threads;
+    wake::surfaceRun(o);
   }
 
   void execute() const {
@@ -98,7 +137,15 @@ struct RunCommand {
                                  " cannot be given with it (the checkpoint holds the run's)");
       options.out_dir = resume_dir;
       wake::resumeRun(options);
+      surfaceAfter(options);
       return;
+    }
+    if (surface) {  // settings checked before the run, not after it
+      try {
+        surface_options.settings.check();
+      } catch (const std::invalid_argument& e) {
+        throw wake::SceneError(e.what());
+      }
     }
     if (scene->count() == 0)
       throw wake::SceneError("run: a scene file is required (or --resume DIR)");
@@ -112,6 +159,58 @@ struct RunCommand {
     options.out_dir = out_dir;
     options.checkpoint_every = checkpoint_every;
     wake::runScene(file, options);
+    surfaceAfter(options);
+  }
+};
+
+/// `wake surface`: the fluid's surfaces (level sets, meshes) and the bodies' meshes.
+struct SurfaceCommand {
+  CLI::App* app = nullptr;
+  wake::SurfaceOptions options;
+  int threads = 0;
+  CLI::Option* threads_option = nullptr;
+
+  void add(CLI::App& parent) {
+    app = parent.add_subcommand(
+        "surface",
+        "Write the fluid's surface per frame (DIR/surface/fluid_NNNNNN.vdb, .ply) and the "
+        "bodies' meshes; add them to DIR/<scene>.xdmf");
+    app->add_option("dir", options.dir, "Output folder of wake run (holds <scene>.h5)")->required();
+    app->add_option("--scene", options.scene, "Which DIR/NAME.h5 when DIR holds several");
+    addSurfaceOptions(app, options);
+    app->add_flag("--quiet,-q", options.quiet, "No progress output");
+    threads_option = app->add_option("--threads,-j", threads, "Threads (>= 1; default: all)");
+  }
+
+  void execute() {
+    if (threads_option->count() > 0 && threads < 1)
+      throw wake::SceneError("--threads: must be >= 1 (got " + std::to_string(threads) + ")");
+    options.threads = threads;
+    options.interactive = isatty(STDERR_FILENO) != 0;
+    options.log = &std::cerr;
+    wake::surfaceRun(options);
+  }
+};
+
+/// `wake export`: particle caches (binary PLY per frame).
+struct ExportCommand {
+  CLI::App* app = nullptr;
+  wake::ExportOptions options;
+
+  void add(CLI::App& parent) {
+    app = parent.add_subcommand(
+        "export",
+        "Write each frame's particles as a binary PLY point cloud "
+        "(DIR/particles/particles_NNNNNN.ply: position, velocity, density, id)");
+    app->add_option("dir", options.dir, "Output folder of wake run (holds <scene>.h5)")->required();
+    app->add_option("--scene", options.scene, "Which DIR/NAME.h5 when DIR holds several");
+    app->add_flag("--quiet,-q", options.quiet, "No progress output");
+  }
+
+  void execute() {
+    options.interactive = isatty(STDERR_FILENO) != 0;
+    options.log = &std::cerr;
+    wake::exportParticles(options);
   }
 };
 
@@ -168,6 +267,10 @@ int main(int argc, char** argv) {
   run.add(app);
   RenderCommand render;
   render.add(app);
+  SurfaceCommand surface;
+  surface.add(app);
+  ExportCommand export_command;
+  export_command.add(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -176,8 +279,10 @@ int main(int argc, char** argv) {
   }
   if (app.get_subcommands().empty())
     return fail(kExitBadInput,
-                "a subcommand is required: wake run SCENE.json --out DIR or wake render DIR "
-                "(see wake --help)");
+                "a subcommand is required: wake run SCENE.json --out DIR, wake render DIR, "
+                "wake surface DIR or wake export DIR (see wake --help)");
   if (render.app->parsed()) return guarded([&] { render.execute(); });
+  if (surface.app->parsed()) return guarded([&] { surface.execute(); });
+  if (export_command.app->parsed()) return guarded([&] { export_command.execute(); });
   return guarded([&] { run.execute(); });
 }
