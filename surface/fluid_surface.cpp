@@ -3,8 +3,9 @@
 
 #include "surface/vdb_mesh.hpp"
 
-#include <openvdb/tools/LevelSetFilter.h>
-#include <openvdb/tools/ParticlesToLevelSet.h>
+#include <openvdb/tools/Morphology.h>
+#include <openvdb/tools/TopologyToLevelSet.h>
+#include <openvdb/tools/ValueTransformer.h>
 
 #include <cmath>
 #include <stdexcept>
@@ -13,20 +14,6 @@
 namespace wake {
 namespace {
 
-/// The particle list ParticlesToLevelSet reads (positions only: one radius for all).
-class ParticleList {
- public:
-  using PosType = openvdb::Vec3R;
-  explicit ParticleList(const std::vector<Vec3>& p) : p_(p) {}
-  std::size_t size() const { return p_.size(); }
-  void getPos(std::size_t n, openvdb::Vec3R& xyz) const {
-    xyz = openvdb::Vec3R(p_[n].x(), p_[n].y(), p_[n].z());
-  }
-
- private:
-  const std::vector<Vec3>& p_;
-};
-
 void checkRange(const char* name, double value, double lo, double hi) {
   if (!(value >= lo && value <= hi))
     throw std::invalid_argument("surface." + std::string(name) + " must be in [" +
@@ -34,28 +21,12 @@ void checkRange(const char* name, double value, double lo, double hi) {
                                 std::to_string(value));
 }
 
-/// The mean height above a square lattice (spacing 2 r) of particles of the union of their
-/// spheres of radius `sphere` (>= sqrt(2) r, so every point of a lattice cell is under the
-/// sphere of its own particle): (1 / 4 r^2) * integral over [-r, r]^2 of
-/// sqrt(sphere^2 - x^2 - y^2), by the midpoint rule (64 x 64 points; error ~1e-5 r).
-double meanCapHeight(double sphere, double r) {
-  constexpr int kN = 64;
-  double sum = 0.0;
-  for (int i = 0; i < kN; ++i)
-    for (int j = 0; j < kN; ++j) {
-      const double x = r * (-1.0 + (2.0 * i + 1.0) / kN);
-      const double y = r * (-1.0 + (2.0 * j + 1.0) / kN);
-      sum += std::sqrt(std::max(0.0, sphere * sphere - x * x - y * y));
-    }
-  return sum / (kN * kN);
-}
-
 }  // namespace
 
 void SurfaceSettings::check() const {
-  checkRange("radius_factor", radius_factor, 1.5, 4.0);
-  checkRange("voxel_factor", voxel_factor, 0.1, radius_factor / 1.5);
-  checkRange("smoothing", smoothing, 0, 20);
+  checkRange("radius_factor", radius_factor, 0.5, 3.0);
+  checkRange("voxel_factor", voxel_factor, 0.25, 2.0);
+  checkRange("smoothing", smoothing, 0, 10);
   checkRange("adaptivity", adaptivity, 0.0, 1.0);
 }
 
@@ -72,30 +43,42 @@ FluidSurface fluidSurface(const std::vector<Vec3>& positions, double particle_ra
   if (!(particle_radius > 0.0) || !std::isfinite(particle_radius))
     throw std::invalid_argument("particle radius must be > 0, got " +
                                 std::to_string(particle_radius));
-  const double voxel = settings.voxel_factor * particle_radius;        // m
-  const double sphere = settings.radius_factor * particle_radius;      // m
-  // The offset that puts a flat face of fluid at rest (particles 2r apart) where the fluid
-  // it stands for ends, r beyond the outer centres: the union of the spheres reaches
-  // meanCapHeight beyond them on average (its bumps are smoothed to that mean).
-  const double erode = std::max(0.0, meanCapHeight(sphere, particle_radius) - particle_radius);
-  // The band holds the erosion and the filter's stencil with room to spare.
-  const double half_width = std::max(3.0, std::ceil(erode / voxel) + 3.0);  // voxels
+  const double voxel = settings.voxel_factor * particle_radius;  // m
+  // Particles 2r apart are 2 / voxel_factor voxels apart: dilating each particle's voxel
+  // by `dilation` voxels joins them into one solid.
+  const int dilation = static_cast<int>(std::ceil(1.0 / settings.voxel_factor));
+  // topologyToLevelSet's zero crossing lies about dilation + 1 voxels beyond the outer
+  // particles' voxel centres, half a voxel further on the low side of each axis than on
+  // the high side (its distance field is rebuilt from the voxels' in/out step by
+  // first-order upwind normalisation; measured over particle sizes, voxel sizes and
+  // offsets in tests/surface): the grid is moved half a voxel up each axis and its zero
+  // crossing by `shift`, to radius_factor r beyond the centres.
+  const double shift = settings.radius_factor * particle_radius - (dilation + 1.0) * voxel;  // m
+  const int half_width = 3 + static_cast<int>(std::ceil(std::abs(shift) / voxel));  // voxels
   FluidSurface out;
-  out.level_set = openvdb::createLevelSet<openvdb::FloatGrid>(voxel, half_width);
+  if (positions.empty()) {
+    out.level_set = openvdb::createLevelSet<openvdb::FloatGrid>(voxel, half_width);
+  } else {
+    const openvdb::MaskGrid::Ptr mask = openvdb::MaskGrid::create();
+    mask->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
+    auto acc = mask->getAccessor();
+    for (const Vec3& p : positions)
+      acc.setValueOn(mask->transform().worldToIndexNodeCentered(openvdb::Vec3d(p.x(), p.y(), p.z())));
+    // 26-neighbour dilation: each particle's voxel grows to a cube of 2 dilation + 1
+    // voxels, so that neighbours on a diagonal join too (a 6-neighbour dilation leaves
+    // holes between particles on a lattice).
+    openvdb::tools::dilateActiveValues(mask->tree(), dilation, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                       openvdb::tools::IGNORE_TILES);
+    out.level_set = openvdb::tools::topologyToLevelSet(*mask, half_width, /*closingSteps=*/1,
+                                                        /*dilation=*/0, settings.smoothing);
+    out.level_set->transform().postTranslate(openvdb::Vec3d(0.5 * voxel));
+    // Move the zero crossing out by `shift` (a distance field shifted is one).
+    const float s = static_cast<float>(shift);
+    openvdb::tools::foreach(out.level_set->beginValueOn(),
+                            [s](const openvdb::FloatGrid::ValueOnIter& it) { it.setValue(*it - s); });
+  }
   out.level_set->setName("fluid");
-  if (positions.empty()) return out;
-
-  openvdb::tools::ParticlesToLevelSet<openvdb::FloatGrid> raster(*out.level_set);
-  raster.rasterizeSpheres(ParticleList(positions), sphere);
-  raster.finalize(/*prune=*/true);
-  if (raster.getMinCount() > 0 || raster.getMaxCount() > 0)
-    throw std::logic_error("fluidSurface: OpenVDB skipped particles (sphere radius " +
-                           std::to_string(sphere / voxel) + " voxels)");
-
-  openvdb::tools::LevelSetFilter<openvdb::FloatGrid> filter(*out.level_set);
-  for (int i = 0; i < settings.smoothing; ++i)
-    filter.gaussian(1);
-  if (erode > 0.0) filter.offset(static_cast<float>(erode));
+  out.level_set->setGridClass(openvdb::GRID_LEVEL_SET);
   out.mesh = meshLevelSet(*out.level_set, settings.adaptivity);
   return out;
 }

@@ -1,12 +1,14 @@
-// The fluid's surface from its particles, for renderers (DESIGN.md §7 "Surfaces"): every
-// particle becomes a sphere of radius radius_factor x r (r the particle radius) in a
-// narrow-band level set (OpenVDB's ParticlesToLevelSet) of voxel size voxel_factor x r;
-// the union is smoothed (`smoothing` Gaussian filter passes, OpenVDB's LevelSetFilter)
-// and offset inward so that a flat face of fluid at rest (particles 2r apart) lies r
-// beyond its outer particles' centres, where the fluid they stand for ends (the offset is
-// the union's mean height over the centres less r: 0.71 r for radius_factor 2); the zero
-// isosurface is meshed (OpenVDB's volumeToMesh, `adaptivity` merging flat regions into
-// fewer, larger polygons). OpenVDB runs in parallel on TBB's threads.
+// The fluid's surface from its particles, for renderers (README "Output"), with OpenVDB:
+// each particle marks its voxel (voxel size voxel_factor x r, r the particle radius); the
+// marked voxels, dilated by ceil(1 / voxel_factor) voxels (26 neighbours) so that particles
+// at rest spacing 2r join, become a narrow-band level set (OpenVDB's topologyToLevelSet, with one
+// morphological closing and `smoothing` smoothing passes); its zero crossing is moved so
+// that a flat face of fluid lies radius_factor x r beyond its outer particles' centres
+// (radius_factor 1: where the fluid the particles stand for ends), and it is meshed
+// (OpenVDB's volumeToMesh; `adaptivity` merges flat regions into fewer, larger polygons).
+// The cost grows with the fluid's volume in voxels, not with its particles' neighbours:
+// a million particles take a few seconds (bench/surface.cpp). OpenVDB runs in parallel
+// on TBB's threads.
 #pragma once
 
 #include "sph/types.hpp"
@@ -21,13 +23,12 @@ namespace wake {
 
 /// How the fluid's surface is built (defaults and ranges in README "Output").
 struct SurfaceSettings {
-  double radius_factor = 2.0;  ///< sphere radius / particle radius, [1.5, 4]
-  double voxel_factor = 0.8;   ///< voxel size / particle radius, [0.1, radius_factor / 1.5]
-  int smoothing = 3;           ///< Gaussian filter passes (width 1 voxel), [0, 20]
+  double radius_factor = 1.0;  ///< surface distance beyond the outer centres / r, [0.5, 3]
+  double voxel_factor = 1.0;   ///< voxel size / particle radius, [0.25, 2]
+  int smoothing = 2;           ///< smoothing passes of topologyToLevelSet, [0, 10]
   double adaptivity = 0.0;     ///< volumeToMesh adaptivity, [0, 1]: 0 = uniform mesh
 
-  /// Throws std::invalid_argument naming the first setting out of its range (a sphere
-  /// must span at least 1.5 voxels, or OpenVDB would skip its particle).
+  /// Throws std::invalid_argument naming the first setting out of its range.
   void check() const;
 };
 
