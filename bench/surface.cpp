@@ -23,7 +23,9 @@
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
 std::vector<wake::Vec3> frame(long n, double r) {
   std::mt19937_64 rng(7);
@@ -78,7 +80,8 @@ int main(int argc, char** argv) {
   const double r = 0.005;
   const std::vector<wake::Vec3> p = frame(particles, r);
   std::printf("surface of one frame: %zu particles, r = %g m, default settings\n", p.size(), r);
-  std::printf("threads  level set+mesh s  .vdb s  .ply s  total s  vertices  triangles  peak MiB\n");
+  std::printf(
+      "threads  level set+mesh s  .vdb s  .ply s  total s  vertices  triangles  peak MiB\n");
   for (const int t : threads) {
     tbb::global_control control(tbb::global_control::max_allowed_parallelism, t);
     const auto t0 = Clock::now();

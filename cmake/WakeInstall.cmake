@@ -7,7 +7,8 @@
 #   <libdir>/libwake_<module>.a             the libraries (static unless BUILD_SHARED_LIBS)
 #   <includedir>/wake/<module>/*.hpp        headers, included as "sph/fluid.hpp" etc.
 #   <bindir>/wake                           the command-line tool (also wake::wake)
-#   <libdir>/cmake/Wake/                    WakeConfig.cmake, version, targets, WakeBullet.cmake
+#   <libdir>/cmake/Wake/                    WakeConfig.cmake, version, targets, WakeBullet.cmake,
+#                                           WakeOpenVDB.cmake
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
@@ -126,6 +127,7 @@ function(wake_install_package)
     ${PROJECT_BINARY_DIR}/cmake/WakeConfig.cmake
     ${PROJECT_BINARY_DIR}/cmake/WakeConfigVersion.cmake
     ${PROJECT_SOURCE_DIR}/cmake/WakeBullet.cmake
+    ${PROJECT_SOURCE_DIR}/cmake/WakeOpenVDB.cmake
     DESTINATION ${WAKE_INSTALL_CMAKEDIR}
     COMPONENT Wake_Development)
 endfunction()

@@ -35,7 +35,7 @@ struct SurfaceSamples {
 /// A triangle mesh of a shape's surface (body space): triangles counter-clockwise seen from
 /// outside (the solid's side is behind each triangle's front).
 struct SurfaceMesh {
-  std::vector<Vec3> vertices;                        ///< m
+  std::vector<Vec3> vertices;                           ///< m
   std::vector<std::array<std::uint32_t, 3>> triangles;  ///< indices into vertices
 
   void addTriangle(const Vec3& a, const Vec3& b, const Vec3& c);

@@ -80,8 +80,8 @@ Rectangle boxFace(const Vec3& lo, const Vec3& hi, int axis, double sign) {
   const int b = (axis + 2) % 3;
   Vec3 corner = lo;
   corner[axis] = sign > 0.0 ? hi[axis] : lo[axis];
-  return Rectangle{corner,        Vec3::Unit(a), hi[a] - lo[a], Vec3::Unit(b),
-                   hi[b] - lo[b], sign * Vec3::Unit(axis)};
+  return Rectangle{corner,        Vec3::Unit(a), hi[a] - lo[a],
+                   Vec3::Unit(b), hi[b] - lo[b], sign * Vec3::Unit(axis)};
 }
 
 /// All six faces of the box [lo, hi] (outward normals).
@@ -236,8 +236,12 @@ class PlaneShape final : public Shape {
       v_lo = std::min(v_lo, v);
       v_hi = std::max(v_hi, v);
     }
-    return Rectangle{origin + u_lo * tangent_u_ + v_lo * tangent_v_, tangent_u_, u_hi - u_lo,
-                     tangent_v_, v_hi - v_lo, normal_};
+    return Rectangle{origin + u_lo * tangent_u_ + v_lo * tangent_v_,
+                     tangent_u_,
+                     u_hi - u_lo,
+                     tangent_v_,
+                     v_hi - v_lo,
+                     normal_};
   }
 };
 

@@ -48,7 +48,7 @@ struct FrameWriter::Impl : hdf5::Writer {
   std::string h5_final, h5_partial, xdmf_final, xdmf_partial;
   Handle file, frames_group, bodies_group;
   std::vector<BodySeries> bodies;  // in the order of sim.bodyStates()
-  std::vector<BodyMesh> meshes;     // in the order of sim.bodyStates()
+  std::vector<BodyMesh> meshes;    // in the order of sim.bodyStates()
   std::vector<XdmfFrame> entries;  // what the XDMF index lists
   Handle particle_index;           // /particle_index: 0, 1, 2, ... (the fluid's cell)
   hsize_t particle_index_size = 0;
@@ -160,8 +160,8 @@ struct FrameWriter::Impl : hdf5::Writer {
     xyz.reserve(3 * mesh.vertices.size());
     for (const Vec3& v : mesh.vertices) {
       const Vec3 w = pose.toWorld(v);
-      xyz.insert(xyz.end(), {static_cast<float>(w.x()), static_cast<float>(w.y()),
-                             static_cast<float>(w.z())});
+      xyz.insert(xyz.end(),
+                 {static_cast<float>(w.x()), static_cast<float>(w.y()), static_cast<float>(w.z())});
     }
     writeDataset(group, name, H5T_NATIVE_FLOAT, xyz.data(), mesh.vertices.size(), 3);
   }
@@ -171,8 +171,8 @@ struct FrameWriter::Impl : hdf5::Writer {
     XdmfFrame f{k, time, particles, {}};
     const std::string h5 = fileName(h5_final);
     for (const BodyMesh& m : meshes)
-      f.meshes.push_back(bodyMeshEntry(h5, m.name, m.moves, k, m.mesh.vertices.size(),
-                                       m.mesh.triangles.size()));
+      f.meshes.push_back(
+          bodyMeshEntry(h5, m.name, m.moves, k, m.mesh.vertices.size(), m.mesh.triangles.size()));
     return f;
   }
 
@@ -228,7 +228,6 @@ struct FrameWriter::Impl : hdf5::Writer {
       writeAttribute(group, "kind", kindName(boundaries.body(b).kind));
     }
   }
-
 };
 
 FrameWriter::FrameWriter(const std::string& out_dir, const SceneFile& scene, const Simulation& sim)

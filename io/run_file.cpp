@@ -110,6 +110,30 @@ void RunFile::readScalars(std::size_t k, RunFrame& out) const {
   out.id.assign(id.begin(), id.end());
 }
 
+void RunFile::readSurface(std::size_t k, SurfaceMesh& out) const {
+  char name[48];
+  std::snprintf(name, sizeof(name), "frames/%06zu", k);
+  const Handle group(H5Gopen2(file_.get(), name, H5P_DEFAULT), H5Gclose);
+  if (!group.valid()) fail(std::string("open /") + name);
+  readMesh(group.get(), "vertices", "triangles", name, out);
+}
+
+void RunFile::readMesh(hid_t group, const char* vertices, const char* triangles,
+                       const std::string& where, SurfaceMesh& out) const {
+  readRows(group, vertices, 3, where, out.vertices);
+  std::vector<double> t;
+  readFlat(group, triangles, 3, where, t);
+  out.triangles.clear();
+  for (std::size_t f = 0; f + 2 < t.size(); f += 3) {
+    const std::array<std::uint32_t, 3> tri = {static_cast<std::uint32_t>(t[f]),
+                                              static_cast<std::uint32_t>(t[f + 1]),
+                                              static_cast<std::uint32_t>(t[f + 2])};
+    for (const std::uint32_t v : tri)
+      if (v >= out.vertices.size()) fail("read /" + where + "/" + triangles + " (bad index)");
+    out.triangles.push_back(tri);
+  }
+}
+
 std::vector<RunBody> RunFile::readBodies() const {
   std::vector<RunBody> out;
   if (H5Lexists(file_.get(), "bodies", H5P_DEFAULT) <= 0) return out;
@@ -139,17 +163,7 @@ std::vector<RunBody> RunFile::readBodies() const {
         fail("match /" + where + "/surface_normals to surface_points");
     }
     if (H5Lexists(group.get(), "mesh_vertices", H5P_DEFAULT) > 0) {
-      readRows(group.get(), "mesh_vertices", 3, where, b.mesh.vertices);
-      std::vector<double> t;
-      readFlat(group.get(), "mesh_triangles", 3, where, t);
-      for (std::size_t f = 0; f + 2 < t.size(); f += 3) {
-        const std::array<std::uint32_t, 3> tri = {static_cast<std::uint32_t>(t[f]),
-                                                   static_cast<std::uint32_t>(t[f + 1]),
-                                                   static_cast<std::uint32_t>(t[f + 2])};
-        for (const std::uint32_t v : tri)
-          if (v >= b.mesh.vertices.size()) fail("read /" + where + "/mesh_triangles (bad index)");
-        b.mesh.triangles.push_back(tri);
-      }
+      readMesh(group.get(), "mesh_vertices", "mesh_triangles", where, b.mesh);
     }
     readRows(group.get(), "position", 3, where, b.position);
     std::vector<double> xyzw;

@@ -31,8 +31,9 @@ struct RunFrame {
   std::size_t index = 0;
   double time = 0.0;  ///< s (read by readScalars)
   std::vector<Vec3> position, velocity;
-  std::vector<double> density;     ///< kg/m^3 (read by readScalars)
-  std::vector<std::uint32_t> id;   ///< (read by readScalars)
+  std::vector<double> density;    ///< kg/m^3 (read by readScalars)
+  std::vector<std::uint32_t> id;  ///< (read by readScalars)
+  SurfaceMesh surface;            ///< the fluid's surface (readSurface of surface.h5)
 };
 
 class RunFile {
@@ -56,6 +57,9 @@ class RunFile {
   /// Frame k's time, densities and ids into `out`.
   void readScalars(std::size_t k, RunFrame& out) const;
   std::vector<RunBody> readBodies() const;
+  /// Frame k's mesh of a surface file (DIR/surface/surface.h5: /frames/NNNNNN/vertices,
+  /// triangles) into `out` (world).
+  void readSurface(std::size_t k, SurfaceMesh& out) const;
 
  private:
   [[noreturn]] void fail(const std::string& what) const;
@@ -64,6 +68,9 @@ class RunFile {
                 std::vector<double>& out) const;
   void readRows(hid_t group, const char* name, hsize_t cols, const std::string& where,
                 std::vector<Vec3>& out) const;
+  /// A triangle mesh: V x 3 `vertices`, T x 3 `triangles` (indices checked).
+  void readMesh(hid_t group, const char* vertices, const char* triangles, const std::string& where,
+                SurfaceMesh& out) const;
 
   std::string path_;
   hdf5::Handle file_;

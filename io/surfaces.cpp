@@ -8,9 +8,11 @@
 #include "io/run_file.hpp"
 #include "io/scene.hpp"
 #include "io/xdmf.hpp"
+#include "surface/fluid_surface.hpp"
 
 #include <openvdb/io/File.h>
 #include <tbb/global_control.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -48,7 +50,9 @@ std::string findRun(const std::string& dir, const std::string& scene) {
   return found[0];
 }
 
-std::string stemOf(const std::string& path) { return fs::path(path).stem().string(); }
+std::string stemOf(const std::string& path) {
+  return fs::path(path).stem().string();
+}
 
 void makeFolder(const std::string& dir) {
   std::error_code ec;
@@ -81,8 +85,7 @@ void writeVdb(const openvdb::FloatGrid::Ptr& grid, const std::string& path) {
 
 /// The run's frames as the XDMF index lists them, with the surface meshes in
 /// surface/surface.h5 when `surface_triangles` is given (one count per frame).
-XdmfRun runIndex(const RunFile& run, const std::string& h5_name,
-                 const std::vector<RunBody>& bodies,
+XdmfRun runIndex(const RunFile& run, const std::string& h5_name, const std::vector<RunBody>& bodies,
                  const std::vector<std::pair<std::size_t, std::size_t>>* surface) {
   XdmfRun x;
   x.h5 = h5_name;
@@ -91,7 +94,8 @@ XdmfRun runIndex(const RunFile& run, const std::string& h5_name,
   for (std::size_t k = 0; k < frames; ++k) {
     const auto [time, particles] = run.frameInfo(k);
     if (particles > x.particle_index)
-      throw SceneError(h5_name + " lacks /particle_index (written by an older Wake?): run it again");
+      throw SceneError(h5_name +
+                       " lacks /particle_index (written by an older Wake?): run it again");
     XdmfFrame f{k, time, particles, {}};
     for (const RunBody& b : bodies)
       f.meshes.push_back(bodyMeshEntry(h5_name, b.name, b.kind != "static", k,
@@ -104,6 +108,22 @@ XdmfRun runIndex(const RunFile& run, const std::string& h5_name,
     x.frames.push_back(std::move(f));
   }
   return x;
+}
+
+nlohmann::ordered_json boundsJson(const Aabb& b) {
+  if (b.empty()) return {{"min", nullptr}, {"max", nullptr}};
+  return {{"min", {b.min.x(), b.min.y(), b.min.z()}}, {"max", {b.max.x(), b.max.y(), b.max.z()}}};
+}
+
+/// One mesh file's entry of surface.json: file, counts, bounds.
+nlohmann::ordered_json meshJson(const std::string& file, const FloatVertices& v,
+                                const Triangles& t) {
+  Aabb b;
+  for (const auto& p : v)
+    b.extend(Vec3(p[0], p[1], p[2]));
+  nlohmann::ordered_json j = {{"file", file}, {"vertices", v.size()}, {"triangles", t.size()}};
+  j.update(boundsJson(b));
+  return j;
 }
 
 std::ostream* logOf(bool quiet, std::ostream* log) {
@@ -136,15 +156,30 @@ SurfaceResult surfaceRun(const SurfaceOptions& options) {
   result.folder = options.dir + "/surface";
   makeFolder(result.folder);
   const std::string out = result.folder + "/";
+  nlohmann::ordered_json manifest;
+  manifest["scene"] = run.rootString("scene");
+  manifest["particle_radius"] = radius;
+  manifest["settings"] = {{"radius_factor", options.settings.radius_factor},
+                          {"voxel_factor", options.settings.voxel_factor},
+                          {"smoothing", options.settings.smoothing},
+                          {"adaptivity", options.settings.adaptivity}};
   // Static bodies once, at their (only) pose.
+  manifest["static_bodies"] = nlohmann::ordered_json::array();
   for (const RunBody& b : bodies)
-    if (b.kind == "static" && !b.mesh.triangles.empty())
-      writeFileAtomically(out + b.name + ".ply", plyMesh(toFloat(b.mesh, b.pose(0)), b.mesh.triangles));
+    if (b.kind == "static" && !b.mesh.triangles.empty()) {
+      const FloatVertices v = toFloat(b.mesh, b.pose(0));
+      writeFileAtomically(out + b.name + ".ply", plyMesh(v, b.mesh.triangles));
+      nlohmann::ordered_json j = meshJson(b.name + ".ply", v, b.mesh.triangles);
+      j["name"] = b.name;
+      manifest["static_bodies"].push_back(j);
+    }
+  manifest["frames"] = nlohmann::ordered_json::array();
 
   hdf5::Writer h5w;
   h5w.path = out + "surface.h5.partial";
-  hdf5::Handle file = h5w.create(
-      H5Fcreate(h5w.path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose, "create the file");
+  hdf5::Handle file =
+      h5w.create(H5Fcreate(h5w.path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose,
+                 "create the file");
   const hdf5::Handle frames_group = h5w.createGroup(file.get(), "frames");
   h5w.writeAttribute(file.get(), "particle_radius", radius);
   h5w.writeAttribute(file.get(), "radius_factor", options.settings.radius_factor);
@@ -162,11 +197,25 @@ SurfaceResult surfaceRun(const SurfaceOptions& options) {
     if (options.vdb) writeVdb(s.level_set, out + "fluid_" + name + ".vdb");
     writeFileAtomically(out + "fluid_" + name + ".ply", plyMesh(s.mesh.vertices, s.mesh.triangles));
     if (options.obj)
-      writeFileAtomically(out + "fluid_" + name + ".obj", objMesh(s.mesh.vertices, s.mesh.triangles));
+      writeFileAtomically(out + "fluid_" + name + ".obj",
+                          objMesh(s.mesh.vertices, s.mesh.triangles));
+    nlohmann::ordered_json entry = {
+        {"frame", k},
+        {"time", run.frameInfo(k).first},
+        {"particles", frame.position.size()},
+        {"fluid", meshJson("fluid_" + name + ".ply", s.mesh.vertices, s.mesh.triangles)},
+        {"bodies", nlohmann::ordered_json::array()}};
+    if (options.vdb) entry["fluid"]["vdb"] = "fluid_" + name + ".vdb";
     for (const RunBody& b : bodies)
-      if (b.kind != "static" && !b.mesh.triangles.empty())
-        writeFileAtomically(out + b.name + "_" + name + ".ply",
-                            plyMesh(toFloat(b.mesh, b.pose(k)), b.mesh.triangles));
+      if (b.kind != "static" && !b.mesh.triangles.empty()) {
+        const FloatVertices v = toFloat(b.mesh, b.pose(k));
+        const std::string ply = b.name + "_" + name + ".ply";
+        writeFileAtomically(out + ply, plyMesh(v, b.mesh.triangles));
+        nlohmann::ordered_json j = meshJson(ply, v, b.mesh.triangles);
+        j["name"] = b.name;
+        entry["bodies"].push_back(j);
+      }
+    manifest["frames"].push_back(entry);
     const hdf5::Handle g = h5w.createGroup(frames_group.get(), name);
     h5w.writeDataset(g.get(), "vertices", H5T_NATIVE_FLOAT, s.mesh.vertices.data(),
                      s.mesh.vertices.size(), 3);
@@ -175,12 +224,13 @@ SurfaceResult surfaceRun(const SurfaceOptions& options) {
     counts.emplace_back(s.mesh.vertices.size(), s.mesh.triangles.size());
     result.last_triangles = s.mesh.triangles.size();
     char line[160];
-    std::snprintf(line, sizeof(line), "[wake] surface frame %zu/%zu  %zu triangles  %.1f s",
-                  k + 1, frames, s.mesh.triangles.size(), progress.elapsed());
+    std::snprintf(line, sizeof(line), "[wake] surface frame %zu/%zu  %zu triangles  %.1f s", k + 1,
+                  frames, s.mesh.triangles.size(), progress.elapsed());
     progress.update(line, k + 1 == frames);
   }
   h5w.check(H5Fclose(file.release()), "close the file");
   renameFile(out + "surface.h5.partial", out + "surface.h5");
+  writeFileAtomically(out + "surface.json", manifest.dump(1) + "\n");
   const std::string h5_name = fs::path(h5).filename().string();
   writeFileAtomically(options.dir + "/" + stemOf(h5) + ".xdmf",
                       xdmfIndex(runIndex(run, h5_name, bodies, &counts)));

@@ -7,13 +7,15 @@
 //   <body>_NNNNNN.ply  each moving body's mesh at the frame's pose; static bodies once as
 //                      <body>.ply
 // and surface.h5 (/frames/NNNNNN/vertices (V x 3 float, m), triangles (T x 3 uint32)),
-// then rewrites DIR/<scene>.xdmf so the surface is a grid of every time step.
+// surface.json (the settings; per frame its time, particle count, and each mesh file with
+// its vertex and triangle counts and bounds: what importers check against), then rewrites
+// DIR/<scene>.xdmf so the surface is a grid of every time step.
 // wake export writes DIR/particles/particles_NNNNNN.ply: binary PLY point clouds with
 // position, velocity, density and id (io/mesh_files.hpp).
 // Every file is written under a temporary name and renamed when complete.
 #pragma once
 
-#include "surface/fluid_surface.hpp"
+#include "surface/surface_settings.hpp"
 
 #include <cstddef>
 #include <iosfwd>
@@ -22,8 +24,8 @@
 namespace wake {
 
 struct SurfaceOptions {
-  std::string dir;              ///< the output folder of a finished run
-  std::string scene;            ///< which DIR/<scene>.h5 when DIR holds several ("": the one)
+  std::string dir;    ///< the output folder of a finished run
+  std::string scene;  ///< which DIR/<scene>.h5 when DIR holds several ("": the one)
   SurfaceSettings settings;
   bool vdb = true;              ///< write the level sets (.vdb)
   bool obj = false;             ///< also write the meshes as .obj
@@ -35,9 +37,9 @@ struct SurfaceOptions {
 
 struct SurfaceResult {
   std::size_t frames = 0;
-  std::string folder;                 ///< DIR/surface
-  double seconds = 0.0;               ///< wall time
-  std::size_t last_triangles = 0;     ///< of the last frame's fluid mesh
+  std::string folder;              ///< DIR/surface
+  double seconds = 0.0;            ///< wall time
+  std::size_t last_triangles = 0;  ///< of the last frame's fluid mesh
 };
 
 /// Surfaces every frame of the run in options.dir. Throws SceneError (io/scene.hpp) when

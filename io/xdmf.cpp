@@ -1,8 +1,10 @@
 #include "io/xdmf.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <iomanip>
 #include <sstream>
+#include <utility>
 
 namespace wake {
 namespace {
@@ -43,13 +45,15 @@ class Writer {
       << xmlEscape(file) << ":" << xmlEscape(path) << "</DataItem>\n";
   }
 
-  void fluid(const XdmfRun& run, const XdmfFrame& f) {
+  template <class Time>
+  void fluid(const XdmfRun& run, const XdmfFrame& f, Time&& time) {
     const std::string group = "/frames/" + frameName(f.index) + "/";
     const char* in = "            ";
-    x << "        <Grid Name=\"fluid\" GridType=\"Uniform\">\n";
+    x << "      <Grid Name=\"fluid_" << frameName(f.index) << "\" GridType=\"Uniform\">\n";
+    time();
     if (f.particles == 0) {
       x << "          <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"0\"/>\n"
-        << "        </Grid>\n";
+        << "      </Grid>\n";
       return;
     }
     // One Polyvertex cell of all the particles (ParaView draws cells, not bare points):
@@ -81,18 +85,22 @@ class Writer {
       item(in, f.particles, a.cols, a.type, a.bytes, run.h5, group + a.name);
       x << "          </Attribute>\n";
     }
-    x << "        </Grid>\n";
+    x << "      </Grid>\n";
   }
 
-  void mesh(const XdmfMesh& m) {
+  template <class Time>
+  void mesh(const XdmfMesh& m, std::size_t k, Time&& time) {
     const char* in = "            ";
-    x << "        <Grid Name=\"" << xmlEscape(m.name) << "\" GridType=\"Uniform\">\n"
+    x << "      <Grid Name=\"" << xmlEscape(m.name) << "_" << frameName(k)
+      << "\" GridType=\"Uniform\">\n";
+    time();
+    x << ""
       << "          <Topology TopologyType=\"Triangle\" NumberOfElements=\"" << m.triangle_count
       << "\">\n";
     item(in, m.triangle_count, 3, "UInt", 4, m.file, m.triangles);
     x << "          </Topology>\n          <Geometry GeometryType=\"XYZ\">\n";
     item(in, m.vertex_count, 3, "Float", m.vertex_bytes, m.file, m.vertices);
-    x << "          </Geometry>\n        </Grid>\n";
+    x << "          </Geometry>\n      </Grid>\n";
   }
 };
 
@@ -104,8 +112,8 @@ std::string frameName(std::size_t k) {
   return buf;
 }
 
-XdmfMesh bodyMeshEntry(const std::string& h5, const std::string& name, bool moves,
-                       std::size_t k, std::size_t vertices, std::size_t triangles) {
+XdmfMesh bodyMeshEntry(const std::string& h5, const std::string& name, bool moves, std::size_t k,
+                       std::size_t vertices, std::size_t triangles) {
   const std::string group = "/bodies/" + name + "/";
   return XdmfMesh{"body_" + name,
                   h5,
@@ -120,18 +128,35 @@ std::string xdmfIndex(const XdmfRun& run) {
   Writer w;
   w.x << std::setprecision(12);
   w.x << "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
-      << "<Xdmf Version=\"2.0\">\n  <Domain>\n"
-      << "    <Grid Name=\"wake\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
-  for (const XdmfFrame& f : run.frames) {
-    w.x << "      <Grid Name=\"frame_" << frameName(f.index)
-        << "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n"
-        << "        <Time Value=\"" << f.time << "\"/>\n";
-    w.fluid(run, f);
-    for (const XdmfMesh& m : f.meshes)
-      w.mesh(m);
-    w.x << "      </Grid>\n";
+      << "<Xdmf Version=\"2.0\">\n  <Domain>\n";
+  // One temporal collection per object (fluid, each body, the surface): ParaView shows
+  // each as a named block of its own, with its own visibility and colouring.
+  auto open = [&](const std::string& name) {
+    w.x << "    <Grid Name=\"" << xmlEscape(name)
+        << "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  };
+  auto time = [&](const XdmfFrame& f) { w.x << "        <Time Value=\"" << f.time << "\"/>\n"; };
+  open("fluid");
+  for (const XdmfFrame& f : run.frames)
+    w.fluid(run, f, [&] { time(f); });
+  w.x << "    </Grid>\n";
+  // The meshes in one order whoever writes the index: bodies by name, the surface last.
+  std::vector<std::size_t> order(run.frames.empty() ? 0 : run.frames.front().meshes.size());
+  for (std::size_t m = 0; m < order.size(); ++m)
+    order[m] = m;
+  auto key = [&](std::size_t m) {
+    const std::string& name = run.frames.front().meshes[m].name;
+    return std::make_pair(name == "surface", name);
+  };
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return key(a) < key(b); });
+  for (const std::size_t m : order) {
+    open(run.frames.front().meshes[m].name);
+    for (const XdmfFrame& f : run.frames)
+      if (m < f.meshes.size()) w.mesh(f.meshes[m], f.index, [&] { time(f); });
+    w.x << "    </Grid>\n";
   }
-  w.x << "    </Grid>\n  </Domain>\n</Xdmf>\n";
+  w.x << "  </Domain>\n</Xdmf>\n";
   return w.x.str();
 }
 

@@ -152,4 +152,49 @@ void drawSplat(Image& im, const RenderCamera& cam, const Light& light, const Vec
   }
 }
 
+void drawTriangle(Image& im, const RenderCamera& cam, const Light& light, const Vec3& a,
+                  const Vec3& b, const Vec3& c, const Rgb& color) {
+  double x[3], y[3], z[3];
+  const Vec3* v[3] = {&a, &b, &c};
+  for (int i = 0; i < 3; ++i)
+    if (!cam.project(*v[i], x[i], y[i], z[i])) return;
+  const double area = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+  if (std::abs(area) < 1e-12) return;
+  // Shading from the face normal in camera coordinates, turned towards the viewer.
+  const Vec3 n = (b - a).cross(c - a).normalized();
+  Vec3 m(n.dot(cam.right), n.dot(cam.up), n.dot(cam.forward));
+  if (m.z() > 0) m = -m;
+  const double lambert = std::max(0.0, m.dot(light.dir));
+  const double spec = std::pow(std::max(0.0, m.dot(light.half)), 60.0);
+  const float shade = static_cast<float>(0.30 + 0.70 * lambert);
+  const float highlight = static_cast<float>(0.45 * spec);
+  const std::array<std::uint8_t, 3> rgb = {toByte(color[0] * shade + highlight),
+                                           toByte(color[1] * shade + highlight),
+                                           toByte(color[2] * shade + highlight)};
+  const int x0 = std::max(0, static_cast<int>(std::floor(std::min({x[0], x[1], x[2]}))));
+  const int x1 = std::min(im.width - 1, static_cast<int>(std::ceil(std::max({x[0], x[1], x[2]}))));
+  const int y0 = std::max(0, static_cast<int>(std::floor(std::min({y[0], y[1], y[2]}))));
+  const int y1 = std::min(im.height - 1, static_cast<int>(std::ceil(std::max({y[0], y[1], y[2]}))));
+  const double inv = 1.0 / area;
+  for (int py = y0; py <= y1; ++py) {
+    const double cy = py + 0.5;
+    for (int px = x0; px <= x1; ++px) {
+      const double cx = px + 0.5;
+      // Barycentric weights of the pixel centre (screen space).
+      const double w0 = ((x[1] - cx) * (y[2] - cy) - (x[2] - cx) * (y[1] - cy)) * inv;
+      const double w1 = ((x[2] - cx) * (y[0] - cy) - (x[0] - cx) * (y[2] - cy)) * inv;
+      const double w2 = 1.0 - w0 - w1;
+      if (w0 < 0 || w1 < 0 || w2 < 0) continue;
+      const float depth = static_cast<float>(w0 * z[0] + w1 * z[1] + w2 * z[2]);
+      const std::size_t at = static_cast<std::size_t>(py) * im.width + px;
+      if (depth >= im.depth[at]) continue;
+      im.depth[at] = depth;
+      std::uint8_t* out = &im.rgb[3 * at];
+      out[0] = rgb[0];
+      out[1] = rgb[1];
+      out[2] = rgb[2];
+    }
+  }
+}
+
 }  // namespace wake::raster

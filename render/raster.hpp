@@ -1,6 +1,7 @@
 // The preview renderer's drawing (render.cpp draws frames with it): colour ramps, an
-// image with a depth buffer, shaded sphere impostors (fluid particles) and flat surface
-// splats (body samples), all in the perspective camera of render.hpp.
+// image with a depth buffer, shaded sphere impostors (fluid particles), flat surface
+// splats (body samples) and shaded triangles (the fluid's surface meshes), all in the perspective
+// camera of render.hpp.
 #pragma once
 
 #include "render/render.hpp"
@@ -46,5 +47,10 @@ void drawSphere(Image& im, const RenderCamera& cam, const Light& light, const Ve
 /// ray-traced per pixel so that surfaces seen at a slant stay flat; shaded with n.
 void drawSplat(Image& im, const RenderCamera& cam, const Light& light, const Vec3& p, double radius,
                const Vec3& n, const Rgb& color);
+
+/// A flat triangle (world vertices a, b, c), shaded two-sided with its face normal
+/// (Lambert and a specular highlight), depth-tested per pixel.
+void drawTriangle(Image& im, const RenderCamera& cam, const Light& light, const Vec3& a,
+                  const Vec3& b, const Vec3& c, const Rgb& color);
 
 }  // namespace wake::raster

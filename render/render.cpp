@@ -21,6 +21,7 @@
 #include <exception>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
@@ -119,7 +120,22 @@ struct Plan {
   std::vector<RunBody> bodies;
   std::vector<Rgb> body_colors;
   std::vector<std::vector<std::uint8_t>> visible;  ///< per static body sample (cut-away)
+  std::unique_ptr<RunFile> surface;  ///< DIR/surface/surface.h5: draw the fluid's surface
 };
+
+/// The fluid's surface, shaded in a water colour (the cut of --section drops the
+/// triangles in front of it).
+void drawSurface(const Plan& plan, const SurfaceMesh& mesh, Image& im) {
+  const RenderCamera& cam = plan.camera;
+  const Rgb water = {0.16f, 0.46f, 0.86f};
+  for (const auto& t : mesh.triangles) {
+    const Vec3 &a = mesh.vertices[t[0]], &b = mesh.vertices[t[1]], &c = mesh.vertices[t[2]];
+    if (plan.section_depth > 0 &&
+        ((a + b + c) / 3.0 - cam.eye).dot(cam.forward) < plan.section_depth)
+      continue;
+    raster::drawTriangle(im, cam, plan.light, a, b, c, water);
+  }
+}
 
 void renderFrame(const Plan& plan, const RunFrame& frame, Image& im) {
   im.clear();
@@ -128,11 +144,22 @@ void renderFrame(const Plan& plan, const RunFrame& frame, Image& im) {
     const RunBody& body = plan.bodies[b];
     const Pose pose = body.pose(frame.index);
     const std::vector<std::uint8_t>& visible = plan.visible[b];
+    if (visible.empty() && !body.mesh.triangles.empty()) {  // its exact mesh, when written
+      for (const auto& t : body.mesh.triangles)
+        raster::drawTriangle(im, cam, plan.light, pose.toWorld(body.mesh.vertices[t[0]]),
+                             pose.toWorld(body.mesh.vertices[t[1]]),
+                             pose.toWorld(body.mesh.vertices[t[2]]), plan.body_colors[b]);
+      continue;
+    }
     for (std::size_t k = 0; k < body.points.size(); ++k) {
       if (!visible.empty() && !visible[k]) continue;
       drawSplat(im, cam, plan.light, pose.toWorld(body.points[k]), plan.body_radius,
                 pose.rotate(body.normals[k]), plan.body_colors[b]);
     }
+  }
+  if (plan.surface) {
+    drawSurface(plan, frame.surface, im);
+    return;
   }
   const bool by_speed =
       plan.color == RenderColor::Speed && frame.velocity.size() == frame.position.size();
@@ -350,8 +377,11 @@ void drawFrames(const RunFile& file, const Plan& plan, const RenderOptions& o,
   for (std::size_t b0 = 0; b0 < selected.size(); b0 += batch) {
     const std::size_t n = std::min(batch, selected.size() - b0);
     data.resize(n);
-    for (std::size_t i = 0; i < n; ++i)
-      file.readFrame(selected[b0 + i], data[i], true, o.color == RenderColor::Speed);
+    for (std::size_t i = 0; i < n; ++i) {
+      file.readFrame(selected[b0 + i], data[i], !plan.surface, o.color == RenderColor::Speed);
+      data[i].index = selected[b0 + i];
+      if (plan.surface) plan.surface->readSurface(selected[b0 + i], data[i].surface);
+    }
     errors.assign(n, std::string());
 #pragma omp parallel
     {
@@ -491,6 +521,7 @@ RenderResult renderRun(const RenderOptions& o) {
                      " is out of range (" + result.h5_path + " has frames 0.." +
                      std::to_string(last_frame) + ")");
 
+  std::error_code ec;
   Plan plan;
   plan.color = o.color;
   plan.radius = file.rootDouble("particle_radius", 0.01);
@@ -499,6 +530,14 @@ RenderResult renderRun(const RenderOptions& o) {
   // close the surface.
   plan.body_radius = 1.5 * plan.radius;
   plan.bodies = file.readBodies();
+  const std::string surface = (fs::path(o.dir) / "surface" / "surface.h5").string();
+  if (!o.particles && fs::is_regular_file(surface, ec)) {
+    plan.surface = std::make_unique<RunFile>(surface);
+    if (plan.surface->frameCount() != frames)
+      throw SceneError(surface + " has " + std::to_string(plan.surface->frameCount()) +
+                       " frames, the run " + std::to_string(frames) +
+                       ": run wake surface again (or draw the particles: --particles)");
+  }
   const RunStatistics stats = sampleRun(file, frames, o.max_speed == 0);
   plan.max_speed = o.max_speed > 0 ? o.max_speed : std::max(stats.speed_scale, 0.05);
   result.max_speed = plan.max_speed;
@@ -510,7 +549,6 @@ RenderResult renderRun(const RenderOptions& o) {
   colourBodies(plan, static_bounds,
                held.empty() ? 0.5 * (box.min + box.max) : Vec3(0.5 * (held.min + held.max)));
 
-  std::error_code ec;
   const std::string out_dir = o.out_dir.empty() ? (fs::path(o.dir) / "frames").string() : o.out_dir;
   fs::create_directories(out_dir, ec);
   if (!fs::is_directory(out_dir, ec))

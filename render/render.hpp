@@ -34,14 +34,17 @@ struct RenderOptions {
   std::string out_dir;  ///< where the PNGs go; empty: DIR/frames (created when missing)
   RenderColor color = RenderColor::Speed;
   RenderView view = RenderView::Iso;
-  int width = 960;              ///< pixels, in [16, 8192]
-  int height = 540;             ///< pixels, in [16, 8192]
-  long first = 0;               ///< first frame to render
-  long last = -1;               ///< last frame to render (inclusive); < 0: the run's last frame
-  long every = 1;               ///< render every N-th frame of [first, last], >= 1
-  double max_speed = 0;         ///< m/s at the top of the speed ramp; 0: automatic
-  bool video = false;           ///< also DIR/<scene>.mp4 with ffmpeg when it is on PATH
-  bool section = false;         ///< draw only the fluid behind the scene's middle (a cut)
+  int width = 960;       ///< pixels, in [16, 8192]
+  int height = 540;      ///< pixels, in [16, 8192]
+  long first = 0;        ///< first frame to render
+  long last = -1;        ///< last frame to render (inclusive); < 0: the run's last frame
+  long every = 1;        ///< render every N-th frame of [first, last], >= 1
+  double max_speed = 0;  ///< m/s at the top of the speed ramp; 0: automatic
+  bool video = false;    ///< also DIR/<scene>.mp4 with ffmpeg when it is on PATH
+  bool section = false;  ///< draw only the fluid behind the scene's middle (a cut)
+  /// Draw the particles even when DIR/surface/surface.h5 (wake surface) holds the fluid's
+  /// surface, which is drawn otherwise.
+  bool particles = false;
   std::ostream* log = nullptr;  ///< progress and the "video skipped" line; nullptr: none
 };
 

@@ -30,7 +30,7 @@ if [ "${WAKE_SKIP_BULLET_DOUBLE:-0}" != 1 ]; then
 fi
 if [ "${WAKE_SKIP_SANITIZERS:-0}" != 1 ]; then
   # Only the test programs of the quick ("sanitize") tests and what they need.
-  BUILD_DIR=build-asan WAKE_BUILD_TARGETS="wake_sph_tests wake_geometry_tests wake_coupling_tests wake_bullet_tests wake_io_tests wake_render_tests" \
+  BUILD_DIR=build-asan WAKE_BUILD_TARGETS="wake_sph_tests wake_geometry_tests wake_surface_tests wake_coupling_tests wake_bullet_tests wake_io_tests wake_render_tests" \
     bash scripts/build.sh -DCMAKE_BUILD_TYPE=RelWithDebInfo -DWAKE_SANITIZE=ON -DWAKE_BUILD_BENCH=OFF
   (cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
      OMP_NUM_THREADS=1 ctest --output-on-failure -j "$(nproc)" --timeout 1200 -L sanitize)

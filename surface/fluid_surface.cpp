@@ -63,19 +63,21 @@ FluidSurface fluidSurface(const std::vector<Vec3>& positions, double particle_ra
     mask->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
     auto acc = mask->getAccessor();
     for (const Vec3& p : positions)
-      acc.setValueOn(mask->transform().worldToIndexNodeCentered(openvdb::Vec3d(p.x(), p.y(), p.z())));
+      acc.setValueOn(
+          mask->transform().worldToIndexNodeCentered(openvdb::Vec3d(p.x(), p.y(), p.z())));
     // 26-neighbour dilation: each particle's voxel grows to a cube of 2 dilation + 1
     // voxels, so that neighbours on a diagonal join too (a 6-neighbour dilation leaves
     // holes between particles on a lattice).
     openvdb::tools::dilateActiveValues(mask->tree(), dilation, openvdb::tools::NN_FACE_EDGE_VERTEX,
                                        openvdb::tools::IGNORE_TILES);
     out.level_set = openvdb::tools::topologyToLevelSet(*mask, half_width, /*closingSteps=*/1,
-                                                        /*dilation=*/0, settings.smoothing);
+                                                       /*dilation=*/0, settings.smoothing);
     out.level_set->transform().postTranslate(openvdb::Vec3d(0.5 * voxel));
     // Move the zero crossing out by `shift` (a distance field shifted is one).
     const float s = static_cast<float>(shift);
-    openvdb::tools::foreach(out.level_set->beginValueOn(),
-                            [s](const openvdb::FloatGrid::ValueOnIter& it) { it.setValue(*it - s); });
+    openvdb::tools::foreach (
+        out.level_set->beginValueOn(),
+        [s](const openvdb::FloatGrid::ValueOnIter& it) { it.setValue(*it - s); });
   }
   out.level_set->setName("fluid");
   out.level_set->setGridClass(openvdb::GRID_LEVEL_SET);

@@ -12,6 +12,7 @@
 #pragma once
 
 #include "sph/types.hpp"
+#include "surface/surface_settings.hpp"
 
 #include <openvdb/openvdb.h>
 
@@ -21,21 +22,10 @@
 
 namespace wake {
 
-/// How the fluid's surface is built (defaults and ranges in README "Output").
-struct SurfaceSettings {
-  double radius_factor = 1.0;  ///< surface distance beyond the outer centres / r, [0.5, 3]
-  double voxel_factor = 1.0;   ///< voxel size / particle radius, [0.25, 2]
-  int smoothing = 2;           ///< smoothing passes of topologyToLevelSet, [0, 10]
-  double adaptivity = 0.0;     ///< volumeToMesh adaptivity, [0, 1]: 0 = uniform mesh
-
-  /// Throws std::invalid_argument naming the first setting out of its range.
-  void check() const;
-};
-
 /// A triangle mesh in world space, single precision (what renderers read).
 struct TriangleMeshF {
-  std::vector<std::array<float, 3>> vertices;              ///< m
-  std::vector<std::array<std::uint32_t, 3>> triangles;     ///< counter-clockwise from outside
+  std::vector<std::array<float, 3>> vertices;           ///< m
+  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< counter-clockwise from outside
 
   /// Bounds of the vertices (empty for an empty mesh).
   Aabb bounds() const;

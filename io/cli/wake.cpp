@@ -5,7 +5,7 @@
 //   wake run --resume DIR [--quiet] [--threads N]
 //   wake render DIR [--out FRAMES_DIR] [--scene NAME] [--color speed|depth] [--width W]
 //               [--height H] [--view iso|front|side|top] [--frames A:B|K] [--every N]
-//               [--max-speed V] [--video] [--quiet] [--threads N]
+//               [--max-speed V] [--video] [--particles] [--quiet] [--threads N]
 //   wake surface DIR [--radius-factor F] [--voxel-factor F] [--smoothing N]
 //                [--adaptivity A] [--obj] [--no-vdb] [--scene NAME] [--quiet] [--threads N]
 //   wake export DIR [--scene NAME] [--quiet]
@@ -68,9 +68,9 @@ void addSurfaceOptions(CLI::App* app, wake::SurfaceOptions& o) {
   app->add_option("--voxel-factor", o.settings.voxel_factor,
                   "Voxel size / particle radius, [0.1, radius-factor / 1.5] (default " +
                       std::to_string(d.voxel_factor).substr(0, 3) + ")");
-  app->add_option("--smoothing", o.settings.smoothing,
-                  "Gaussian smoothing passes, [0, 20] (default " + std::to_string(d.smoothing) +
-                      ")");
+  app->add_option(
+      "--smoothing", o.settings.smoothing,
+      "Gaussian smoothing passes, [0, 20] (default " + std::to_string(d.smoothing) + ")");
   app->add_option("--adaptivity", o.settings.adaptivity,
                   "Mesh adaptivity, [0, 1]: 0 uniform, higher fewer triangles (default 0)");
   app->add_flag("--obj", o.obj, "Also write the fluid's meshes as OBJ");
@@ -239,6 +239,8 @@ struct RenderCommand {
                     "Speed at the top of the colour ramp, m/s (default: 99th percentile)");
     app->add_flag("--section", options.section,
                   "Cut the fluid in half (the half facing the camera is not drawn)");
+    app->add_flag("--particles", options.particles,
+                  "Draw the particles even when DIR/surface/ holds the fluid's surface");
     app->add_flag("--video", options.video,
                   "Also write DIR/<scene>.mp4 with ffmpeg (skipped when ffmpeg is missing)");
     app->add_flag("--quiet,-q", quiet, "No progress output");

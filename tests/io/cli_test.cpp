@@ -193,10 +193,20 @@ TEST_F(SmallDambreakRun, XdmfIndexesEveryFrameOfTheH5File) {
   EXPECT_EQ(x.find(".partial"), std::string::npos);
   EXPECT_NE(x.find("CollectionType=\"Temporal\""), std::string::npos);
   EXPECT_NE(x.find("Polyvertex"), std::string::npos);
-  std::size_t grids = 0;
+  // One temporal collection per object: the fluid's has a grid per frame, and so has the
+  // tank's.
+  std::size_t fluid = 0, tank = 0, times = 0;
+  for (auto at = x.find("Name=\"fluid_"); at != std::string::npos;
+       at = x.find("Name=\"fluid_", at + 1))
+    ++fluid;
+  for (auto at = x.find("Name=\"body_tank_"); at != std::string::npos;
+       at = x.find("Name=\"body_tank_", at + 1))
+    ++tank;
   for (auto at = x.find("<Time "); at != std::string::npos; at = x.find("<Time ", at + 1))
-    ++grids;
-  EXPECT_EQ(grids, kFrames);
+    ++times;
+  EXPECT_EQ(fluid, kFrames);
+  EXPECT_EQ(tank, kFrames);
+  EXPECT_EQ(times, 2 * kFrames);
 }
 
 TEST_F(SmallDambreakRun, BadInputFailsAndLeavesEarlierOutputUntouched) {

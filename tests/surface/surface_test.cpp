@@ -66,10 +66,10 @@ TEST(FluidSurface, ABlockOfParticlesGivesTheBlockOfFluidTheyStandFor) {
     double voxel_factor;
     Vec3 origin;
   };
-  for (const Case& c : {Case{0.01, 16, 1.0, Vec3(0.31, -0.2, 1.7)},
-                        Case{0.0137, 16, 1.0, Vec3(0.31, -0.2, 1.7)},
-                        Case{0.025, 12, 1.0, Vec3(-1.013, 0.4441, 0.0)},
-                        Case{0.01, 16, 0.5, Vec3(0.3177, -0.2, 1.7)}}) {
+  for (const Case& c :
+       {Case{0.01, 16, 1.0, Vec3(0.31, -0.2, 1.7)}, Case{0.0137, 16, 1.0, Vec3(0.31, -0.2, 1.7)},
+        Case{0.025, 12, 1.0, Vec3(-1.013, 0.4441, 0.0)},
+        Case{0.01, 16, 0.5, Vec3(0.3177, -0.2, 1.7)}}) {
     SurfaceSettings settings;
     settings.voxel_factor = c.voxel_factor;
     const double r = c.r, voxel = c.voxel_factor * r;
@@ -161,9 +161,10 @@ void expectOnSurface(const Shape& shape, const SurfaceMesh& mesh, double tol, do
   for (const Vec3& v : mesh.vertices)
     worst = std::max(worst, std::abs(shape.signedDistance(v)));
   EXPECT_LT(worst, tol) << shape.typeName();
-  if (std::isfinite(shape.volume()))
+  if (std::isfinite(shape.volume())) {
     EXPECT_NEAR(enclosedVolume(mesh.vertices, mesh.triangles) / shape.volume(), 1.0, rel)
         << shape.typeName();
+  }
 }
 
 TEST(ShapeMesh, FlatShapesAreExactAndCurvedOnesCloseToTheirSurface) {
