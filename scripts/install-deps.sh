@@ -1,11 +1,16 @@
 #!/usr/bin/env bash
 # Installs Wake's build and test dependencies from Debian 12's packages (run as root).
+# --clients also installs the programs the client tests open Wake's output with (Blender,
+# ParaView's pvpython, and Xvfb for ParaView's rendering without a display).
 # Skips apt entirely when everything is already there.
 set -euo pipefail
 packages=(cmake ninja-build g++ make pkg-config
   libeigen3-dev libbullet-dev libhdf5-dev nlohmann-json3-dev libcli11-dev
   libtinyobjloader-dev libgtest-dev libgmock-dev libbenchmark-dev
-  libstb-dev gnuplot-nox)
+  libstb-dev libopenvdb-dev gnuplot-nox)
+if [ "${1:-}" = "--clients" ]; then
+  packages+=(blender python3-paraview xvfb xauth libgl1-mesa-dri)
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

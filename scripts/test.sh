@@ -7,7 +7,7 @@
 # WAKE_ALL_TESTS=1 also runs the tests labelled "slow" (not run by default, see below).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/install-deps.sh
+bash scripts/install-deps.sh --clients
 BUILD_DIR=build bash scripts/build.sh
 # One test per core, each on one thread: the physics tests and scene runs scale better
 # that way than one test at a time on every core (results are the same bits on any
