@@ -3,10 +3,15 @@
 // HDF5 layout (contract; extend, never rename):
 //   /                       attributes scene (string), particle_radius (m),
 //                           rest_density (kg/m^3), speed_of_sound (m/s), frame_rate (1/s)
+//   /particle_index         0, 1, 2, ... (uint32, as long as the largest frame): the
+//                           connectivity of the XDMF's one Polyvertex cell of particles
 //   /frames/000000, ...     one group per output frame, attribute time (s), datasets
 //                             position (N x 3, m), velocity (N x 3, m/s),
-//                             density (N, kg/m^3), pressure (N, Pa),
-//                             id (N, uint32: permanent particle number, ascending)
+//                             density (N, kg/m^3; 0 in frame 0, written before the
+//                             first step computes it), pressure (N, Pa),
+//                             id (N, uint32: permanent particle number, ascending),
+//                           and bodies/<name> (V x 3, float, m): each moving body's mesh
+//                             vertices in the world at the frame's time
 //   /bodies/<name>/         one row per output frame, extendible datasets
 //                             time (F, s), position (F x 3, m, centre of mass),
 //                             orientation (F x 4, x y z w), linear_velocity (F x 3, m/s),
@@ -15,7 +20,13 @@
 //                           written once: surface_points (M x 3, m) and surface_normals
 //                             (M x 3, unit) of the body's M boundary samples in the BODY
 //                             frame (origin = centre of mass; world = orientation * p +
-//                             position); infinite shapes (planes) only within the domain
+//                             position); infinite shapes (planes) only within the domain;
+//                             mesh_vertices (V x 3, m, body frame) and mesh_triangles
+//                             (T x 3, uint32, counter-clockwise seen from outside): the
+//                             body's shape as triangles (exact for flat shapes, within
+//                             about 1 % of the size for curved ones: surface/shape_mesh.hpp);
+//                             static bodies: mesh_world (V x 3, float, m), their vertices
+//                             in the world
 //
 // While the run goes on, the files are DIR/<name>.h5.partial and DIR/<name>.xdmf.partial
 // (flushed and rewritten after every frame, so a running or crashed run can be inspected);
