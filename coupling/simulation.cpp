@@ -485,6 +485,33 @@ void Simulation::snapshot(FluidSnapshot& out) const {
     out.density[k] = st.density[i];
     out.pressure[k] = st.pressure[i];
   }
+  if (steps() == 0) startDensities(out);
+}
+
+void Simulation::startDensities(FluidSnapshot& out) const {
+  // Before the first step nothing has summed the densities: a copy of the fluid is
+  // sorted and summed as a step would (fluid and walls' share), the run's state untouched.
+  // A fluid with particles the first step will remove (outside the domain, not finite)
+  // keeps its densities as they are.
+  for (const Vec3& x : out.position)
+    if (!finite(x) || !model_.domain.contains(x)) return;
+  FluidState copy = fluid_->state();
+  Fluid probe(fluid_->params(), model_.domain, &copy);
+  probe.updateNeighbors();
+  probe.computeFluidDensity();
+  boundaries_->addDensity(probe, placement(), copy.density);
+  probe.computePressure();
+  std::vector<std::uint32_t> rank_of_id;
+  for (std::size_t k = 0; k < out.id.size(); ++k) {
+    const std::uint32_t id = out.id[k];
+    if (id >= rank_of_id.size()) rank_of_id.resize(id + 1, 0);
+    rank_of_id[id] = static_cast<std::uint32_t>(k);
+  }
+  for (std::size_t i = 0; i < copy.size(); ++i) {
+    const std::uint32_t k = rank_of_id[copy.id[i]];
+    out.density[k] = copy.density[i];
+    out.pressure[k] = copy.pressure[i];
+  }
 }
 
 std::uint64_t stateHash(const Simulation& sim) {

@@ -227,6 +227,8 @@ class Simulation {
   /// bodies. Throws std::invalid_argument when it does not fit them (counts, sizes).
   void restoreState(const SimulationState& state);
 
+  /// The fluid now, in id order. Before the first step its densities and pressures are
+  /// summed for it (on a copy: the run is not touched), as the first step will.
   void snapshot(FluidSnapshot& out) const;
   std::vector<BodyState> bodyStates() const;
   /// The bodies placed where the rigid-body side has them now (for the boundaries'
@@ -264,6 +266,9 @@ class Simulation {
   const SimulationSettings settings_;  // as given
   SimulationSettings model_;           // resolved in the constructor, constant after
   RunData data_;  // what changes (with the rigid side's states); fluid_ steps data_.fluid
+  /// snapshot() before the first step: the densities and pressures of `out` summed on a
+  /// copy of the fluid.
+  void startDensities(FluidSnapshot& out) const;
   std::unique_ptr<Fluid> fluid_;  // the fluid's model and scratch; steps data_.fluid
   std::unique_ptr<Boundaries> boundaries_;
   std::unique_ptr<RigidBodies> rigid_;

@@ -104,7 +104,7 @@ def frame_camera_and_light(manifest, entry):
     cam_data = bpy.data.cameras.new("wake_camera")
     cam = bpy.data.objects.new("wake_camera", cam_data)
     bpy.context.scene.collection.objects.link(cam)
-    cam.location = centre + Vector((-0.6 * size, -1.2 * size, 0.7 * size))
+    cam.location = centre + Vector((-0.45 * size, -0.9 * size, 1.1 * size))
     cam.rotation_mode = "QUATERNION"
     cam.rotation_quaternion = (centre - cam.location).to_track_quat("-Z", "Y")
     bpy.context.scene.camera = cam

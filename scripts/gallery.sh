@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # README's gallery, made with Wake's own commands: plays every demo scene in
-# scenes/ at its default resolution (wake run), draws one chosen frame of each
-# (wake render) into demos/gallery/<scene>.png and plots the time series of a few
+# scenes/ at its default resolution and surfaces the water (wake run --surface), draws
+# one chosen frame of each, the water as its surface mesh (wake render), into
+# demos/gallery/<scene>.png and plots the time series of a few
 # (scripts/plot.sh) into demos/gallery/<scene>_<plot>.png.
 #
 #   bash scripts/gallery.sh [--reuse] [SCENE...]   (default: every scene; needs build/)
@@ -42,7 +43,9 @@ mkdir -p demos/gallery
 for name in "${scenes[@]}"; do
   out=out/gallery/$name
   if ((reuse == 0)) || [[ ! -f "$out/summary.json" ]]; then
-    "$wake" run "scenes/$name.json" --out "$out" --quiet
+    "$wake" run "scenes/$name.json" --out "$out" --surface --quiet
+  elif [[ ! -f "$out/surface/surface.json" ]]; then
+    "$wake" surface "$out" --quiet
   fi
   rate=$(sed -n 's/.*"frame_rate": *\([0-9.]*\).*/\1/p' "scenes/$name.json" | head -1)
   t=${still[$name]:-0.5}

@@ -9,7 +9,7 @@ packages=(cmake ninja-build g++ make pkg-config
   libtinyobjloader-dev libgtest-dev libgmock-dev libbenchmark-dev
   libstb-dev libopenvdb-dev gnuplot-nox)
 if [ "${1:-}" = "--clients" ]; then
-  packages+=(blender python3-paraview xvfb xauth libgl1-mesa-dri)
+  packages+=(blender python3-paraview xvfb libgl1-mesa-dri)
 fi
 missing=()
 for p in "${packages[@]}"; do

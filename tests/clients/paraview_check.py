@@ -1,5 +1,5 @@
-# ParaView draws Wake's output: run by CTest under xvfb-run (tests/CMakeLists.txt),
-#   xvfb-run -a pvpython paraview_check.py RUN_DIR SCENE PICTURE.png
+# ParaView draws Wake's output: run by CTest under Xvfb (tests/CMakeLists.txt),
+#   tests/clients/with_xvfb.sh pvpython paraview_check.py RUN_DIR SCENE PICTURE.png
 # Opens RUN_DIR/SCENE.xdmf with ParaView's own reader and checks, at several times, the
 # blocks (fluid, each body, the surface), the fluid's cell and point counts and arrays
 # against Wake's numbers (RUN_DIR/surface/surface.json); then renders the default
@@ -85,8 +85,7 @@ for k in sorted({0, len(frames) // 2, len(frames) - 1}):
     if not {"velocity", "density", "pressure", "id"} <= arrays:
         fail("t = %g: fluid arrays %s" % (times[k], sorted(arrays)))
     rho = fluid.GetPointData().GetArray("density").GetRange()
-    # Frame 0 is written before the first step computes densities (they are 0 there).
-    if k > 0 and not (500 < rho[0] <= rho[1] < 2000):
+    if not (500 < rho[0] <= rho[1] < 2000):
         fail("t = %g: density range %s" % (times[k], rho))
     if surface.GetNumberOfCells() != entry["fluid"]["triangles"] or \
        surface.GetNumberOfPoints() != entry["fluid"]["vertices"]:
@@ -130,16 +129,18 @@ if not (0.5 * n / (640.0 * 360.0) < share < 0.9):
     fail("the fluid covers %.2f %% of the picture, %d particles" % (100 * share, n))
 Hide(fluid_only, view)
 
-# The picture: particles coloured by speed, the bodies and the water surface.
-display = Show(reader, view)
-ColorBy(display, ("POINTS", "velocity", "Magnitude"))
-display.SetScalarBarVisibility(view, False)
-display.Opacity = 0.6
-view.CameraPosition = [0, 0, 0]
+# The picture: the bodies and the water surface see-through, the particles coloured by
+# speed on top.
+everything = Show(reader, view)
+everything.Opacity = 0.3
+particles = Show(fluid_only, view)
+ColorBy(particles, ("POINTS", "velocity", "Magnitude"))
+particles.PointSize = 4
+particles.SetScalarBarVisibility(view, False)
 ResetCamera(view)
 camera = view.GetActiveCamera()
-camera.Elevation(25)
-camera.Azimuth(-35)
+camera.Elevation(30)
+camera.Azimuth(-30)
 ResetCamera(view)
 Render(view)
 SaveScreenshot(picture, view, ImageResolution=[640, 360])

@@ -186,6 +186,25 @@ TEST_F(SmallDambreakRun, Hdf5HasTheContractLayout) {
   H5Fclose(file);
 }
 
+TEST_F(SmallDambreakRun, TheFirstFrameHasItsDensities) {
+  // Frame 0 is written before the first step: its densities are summed for it, so the
+  // fluid at rest on its lattice has the rest density inside (the median) and no particle
+  // is without one.
+  ASSERT_EQ(run_->status, 0) << run_->err;
+  const hid_t file = H5Fopen((outDir() / "small_dambreak.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  std::vector<double> rho = readDataset<double>(file, "/frames/000000/density", H5T_NATIVE_DOUBLE);
+  const std::vector<double> p =
+      readDataset<double>(file, "/frames/000000/pressure", H5T_NATIVE_DOUBLE);
+  H5Fclose(file);
+  ASSERT_FALSE(rho.empty());
+  EXPECT_EQ(p.size(), rho.size());
+  for (const double r : rho)
+    ASSERT_GT(r, 300.0);
+  std::nth_element(rho.begin(), rho.begin() + rho.size() / 2, rho.end());
+  EXPECT_NEAR(rho[rho.size() / 2], 1000.0, 30.0);
+}
+
 TEST_F(SmallDambreakRun, XdmfIndexesEveryFrameOfTheH5File) {
   ASSERT_EQ(run_->status, 0) << run_->err;
   const std::string x = readFile(outDir() / "small_dambreak.xdmf");

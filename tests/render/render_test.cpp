@@ -207,6 +207,50 @@ TEST_F(RenderTest, FramesShowTheFluidAndTheBody) {
   EXPECT_LT(warm, std::size_t(png.width) * png.height / 4);
 }
 
+TEST_F(RenderTest, DrawsTheWaterSurfaceWhenItWasWritten) {
+  // A copy of the run, surfaced: the render draws the surface mesh in the water colour
+  // where its vertices project, and --particles draws the particles instead.
+  const fs::path dir = *root_ / "surfaced";
+  fs::remove_all(dir);
+  fs::copy(runDir(), dir, fs::copy_options::recursive);
+  const Cli s = wake("surface \"" + dir.string() + "\" --quiet --no-vdb");
+  ASSERT_EQ(s.status, 0) << s.err;
+  RenderOptions options;
+  options.dir = dir.string();
+  options.out_dir = (dir / "frames").string();
+  options.width = 320;
+  options.height = 200;
+  options.first = options.last = 2;
+  const RenderResult r = renderRun(options);
+  ASSERT_EQ(r.images.size(), 1u);
+  const Png png = loadPng(r.images[0]);
+  ASSERT_EQ(png.width, 320);
+  const hid_t file = H5Fopen((dir / "surface" / "surface.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  const std::vector<float> v =
+      test::readDataset<float>(file, "/frames/000002/vertices", H5T_NATIVE_FLOAT);
+  H5Fclose(file);
+  ASSERT_GT(v.size(), 300u);
+  std::size_t inside = 0, blue = 0;
+  for (std::size_t k = 0; k + 2 < v.size(); k += 3) {
+    double sx, sy, depth;
+    if (!r.camera.project(Vec3(v[k], v[k + 1], v[k + 2]), sx, sy, depth)) continue;
+    const int px = static_cast<int>(sx), py = static_cast<int>(sy);
+    if (px < 0 || py < 0 || px >= png.width || py >= png.height) continue;
+    ++inside;
+    const unsigned char* c = png.at(px, py);
+    if (c[2] > c[0] + 40) ++blue;
+  }
+  EXPECT_EQ(inside, v.size() / 3) << "the camera sees all of the surface";
+  // Vertices on the silhouette may show the body or the tank behind: most are water.
+  EXPECT_GE(blue, inside * 70 / 100);
+  options.particles = true;
+  options.out_dir = (dir / "particle_frames").string();
+  const RenderResult p = renderRun(options);
+  ASSERT_EQ(p.images.size(), 1u);
+  EXPECT_NE(readFile(p.images[0]), readFile(r.images[0]));
+}
+
 TEST_F(RenderTest, CommandLineRendersChosenFramesAndViews) {
   const fs::path out = *root_ / "cli_frames";
   const Cli r = wake("render \"" + runDir().string() + "\" --out \"" + out.string() +
