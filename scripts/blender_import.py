@@ -104,7 +104,8 @@ def frame_camera_and_light(manifest, entry):
     cam_data = bpy.data.cameras.new("wake_camera")
     cam = bpy.data.objects.new("wake_camera", cam_data)
     bpy.context.scene.collection.objects.link(cam)
-    cam.location = centre + Vector((-0.45 * size, -0.9 * size, 1.1 * size))
+    cam_data.lens = 35.0
+    cam.location = centre + Vector((-0.3 * size, -0.75 * size, 1.25 * size))
     cam.rotation_mode = "QUATERNION"
     cam.rotation_quaternion = (centre - cam.location).to_track_quat("-Z", "Y")
     bpy.context.scene.camera = cam

@@ -98,7 +98,7 @@ if picture:
     blender_import.frame_camera_and_light(manifest, entry)
     scene = bpy.context.scene
     scene.render.engine = "CYCLES"
-    scene.cycles.samples = 16
+    scene.cycles.samples = 48
     scene.cycles.use_denoising = False
     scene.render.resolution_x, scene.render.resolution_y = 640, 360
     scene.render.filepath = picture

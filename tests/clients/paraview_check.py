@@ -85,7 +85,9 @@ for k in sorted({0, len(frames) // 2, len(frames) - 1}):
     if not {"velocity", "density", "pressure", "id"} <= arrays:
         fail("t = %g: fluid arrays %s" % (times[k], sorted(arrays)))
     rho = fluid.GetPointData().GetArray("density").GetRange()
-    if not (500 < rho[0] <= rho[1] < 2000):
+    # Every particle has a density (free spray may be far below rest), none is compressed
+    # anywhere near twice the rest density (1000 kg/m^3 in the scenes checked here).
+    if not (0 < rho[0] <= rho[1] < 2000):
         fail("t = %g: density range %s" % (times[k], rho))
     if surface.GetNumberOfCells() != entry["fluid"]["triangles"] or \
        surface.GetNumberOfPoints() != entry["fluid"]["vertices"]:
