@@ -3,15 +3,17 @@
 # their frame, the static bodies once, a water material, a camera and a sun.
 #
 #   blender --python scripts/blender_import.py -- DIR/surface [--material clear|blue|NAME]
-#           [--fps N] [--frames A:B] [--render OUT_PREFIX]
+#           [--fps N] [--frames A:B] [--render OUT_PREFIX [--samples N]]
 #
 # --material: "clear" (default: glass-like water), "blue" (tinted water), or the name of a
 #   material already in the .blend file you opened (blender my.blend --python ...).
 # --fps: Blender's frame rate (default: the run's frame rate from surface.json).
 # --frames A:B: only Wake frames A..B (inclusive).
-# --render OUT_PREFIX: render the animation with Cycles to OUT_PREFIX#### .png and quit
-#   (add -b before --python for no window).
-# Blender frame 1 is the first Wake frame loaded. Needs Blender 3.x (Debian 12: blender).
+# --render OUT_PREFIX: render the animation with Cycles (960 x 540, --samples N, default
+#   64) to OUT_PREFIX####.png (add -b before --python for no window).
+# Blender frame 1 is the first Wake frame loaded. Started without a .blend file, the
+# start-up scene's cube, camera and light are removed first. Needs Blender 3.x (Debian 12:
+# blender).
 import json
 import os
 import sys
@@ -123,6 +125,10 @@ def frame_camera_and_light(manifest, entry):
 
 def load(folder, material="clear", fps=None, first=0, last=None):
     manifest = json.load(open(os.path.join(folder, "surface.json")))
+    if not bpy.data.filepath:  # Blender's start-up scene: its cube would hide the run
+        for name in ("Cube", "Camera", "Light"):
+            if name in bpy.data.objects:
+                bpy.data.objects.remove(bpy.data.objects[name], do_unlink=True)
     frames = manifest["frames"][first:None if last is None else last + 1]
     if not frames:
         raise SystemExit("blender_import: no frames to load in " + folder)
@@ -162,5 +168,9 @@ if __name__ == "__main__":
          float(options["--fps"]) if "--fps" in options else None, first, last)
     if "--render" in options:
         bpy.context.scene.render.engine = "CYCLES"
+        bpy.context.scene.cycles.use_denoising = False  # Debian's Blender has no denoiser
+        bpy.context.scene.cycles.samples = int(options.get("--samples", 64))
+        bpy.context.scene.render.resolution_x = 960
+        bpy.context.scene.render.resolution_y = 540
         bpy.context.scene.render.filepath = options["--render"]
         bpy.ops.render.render(animation=True)
