@@ -84,6 +84,16 @@ Rgb bodyColor(const std::string& kind, std::size_t nth_of_kind) {
   return warm[nth_of_kind % 5];
 }
 
+/// Writes colour `rgb` at pixel `at` when `depth` is nearer than what is there.
+static void plot(Image& im, std::size_t at, float depth, const std::array<std::uint8_t, 3>& rgb) {
+  if (depth >= im.depth[at]) return;
+  im.depth[at] = depth;
+  std::uint8_t* out = &im.rgb[3 * at];
+  out[0] = rgb[0];
+  out[1] = rgb[1];
+  out[2] = rgb[2];
+}
+
 void drawSphere(Image& im, const RenderCamera& cam, const Light& light, const Vec3& p,
                 double radius, const Rgb& color) {
   Footprint fp;
@@ -142,12 +152,7 @@ void drawSplat(Image& im, const RenderCamera& cam, const Light& light, const Vec
       if (t <= 0 || ex * ex + ey * ey + ez * ez >= r2) continue;
       const std::size_t at = static_cast<std::size_t>(y) * im.width + x;
       const float depth = static_cast<float>(t);
-      if (depth >= im.depth[at]) continue;
-      im.depth[at] = depth;
-      std::uint8_t* out = &im.rgb[3 * at];
-      out[0] = rgb[0];
-      out[1] = rgb[1];
-      out[2] = rgb[2];
+      plot(im, at, depth, rgb);
     }
   }
 }
@@ -187,12 +192,7 @@ void drawTriangle(Image& im, const RenderCamera& cam, const Light& light, const 
       if (w0 < 0 || w1 < 0 || w2 < 0) continue;
       const float depth = static_cast<float>(w0 * z[0] + w1 * z[1] + w2 * z[2]);
       const std::size_t at = static_cast<std::size_t>(py) * im.width + px;
-      if (depth >= im.depth[at]) continue;
-      im.depth[at] = depth;
-      std::uint8_t* out = &im.rgb[3 * at];
-      out[0] = rgb[0];
-      out[1] = rgb[1];
-      out[2] = rgb[2];
+      plot(im, at, depth, rgb);
     }
   }
 }

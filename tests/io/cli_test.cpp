@@ -27,6 +27,7 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 using wake::test::CliResult;
+using wake::test::countOf;
 using wake::test::datasetDims;
 using wake::test::readDataset;
 using wake::test::readFile;
@@ -216,15 +217,9 @@ TEST_F(SmallDambreakRun, XdmfIndexesEveryFrameOfTheH5File) {
   EXPECT_NE(x.find("Polyvertex"), std::string::npos);
   // One temporal collection per object: the fluid's has a grid per frame, and so has the
   // tank's.
-  std::size_t fluid = 0, tank = 0, times = 0;
-  for (auto at = x.find("Name=\"fluid_"); at != std::string::npos;
-       at = x.find("Name=\"fluid_", at + 1))
-    ++fluid;
-  for (auto at = x.find("Name=\"body_tank_"); at != std::string::npos;
-       at = x.find("Name=\"body_tank_", at + 1))
-    ++tank;
-  for (auto at = x.find("<Time "); at != std::string::npos; at = x.find("<Time ", at + 1))
-    ++times;
+  const std::size_t fluid = countOf(x, "Name=\"fluid_");
+  const std::size_t tank = countOf(x, "Name=\"body_tank_");
+  const std::size_t times = countOf(x, "<Time ");
   EXPECT_EQ(fluid, kFrames);
   EXPECT_EQ(tank, kFrames);
   EXPECT_EQ(times, 2 * kFrames);

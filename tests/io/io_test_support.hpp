@@ -69,6 +69,14 @@ struct TempDir {
   }
 };
 
+/// Occurrences of `needle` in `text`.
+inline std::size_t countOf(const std::string& text, const std::string& needle) {
+  std::size_t n = 0;
+  for (auto at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1))
+    ++n;
+  return n;
+}
+
 struct CliResult {
   int status = -1;  ///< exit status of the wake binary
   std::string out, err;

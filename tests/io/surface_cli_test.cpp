@@ -24,6 +24,7 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 using wake::test::CliResult;
+using wake::test::countOf;
 using wake::test::datasetDims;
 using wake::test::readDataset;
 using wake::test::readFile;
@@ -176,15 +177,9 @@ TEST_F(SurfaceRun, TheBoxMeshFollowsTheBoxsPose) {
 TEST_F(SurfaceRun, TheXdmfNamesTheSurfaceAndBodiesOfEveryTimeStep) {
   ASSERT_EQ(run_->status, 0) << run_->err;
   const std::string x = readFile(out() / "small_float.xdmf");
-  std::size_t surfaces = 0, boxes = 0, times = 0;
-  for (auto at = x.find("Name=\"surface_0"); at != std::string::npos;
-       at = x.find("Name=\"surface_0", at + 1))
-    ++surfaces;
-  for (auto at = x.find("Name=\"body_box_0"); at != std::string::npos;
-       at = x.find("Name=\"body_box_0", at + 1))
-    ++boxes;
-  for (auto at = x.find("<Time "); at != std::string::npos; at = x.find("<Time ", at + 1))
-    ++times;
+  const std::size_t surfaces = countOf(x, "Name=\"surface_0");
+  const std::size_t boxes = countOf(x, "Name=\"body_box_0");
+  const std::size_t times = countOf(x, "<Time ");
   EXPECT_EQ(times, 11u * 4);  // fluid, box, tank, surface: a grid per frame each
   EXPECT_EQ(surfaces, 11u);
   EXPECT_EQ(boxes, 11u);
