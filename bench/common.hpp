@@ -18,12 +18,14 @@ struct Options {
   int warmup = 20;
   int bodies = 8;
   std::vector<int> threads = {1, 2};
+  std::string scene;  ///< wake_bench_dambreak: a scene file to run instead of the synthetic one
+  bool particles_given = false;
 };
 
 [[noreturn]] inline void usage(const char* program, const char* msg) {
   std::fprintf(stderr,
                "error: %s\nusage: %s [--particles N] [--steps S] [--warmup W] [--threads 1,2]"
-               " [--bodies B]\n",
+               " [--bodies B] [--scene FILE]\n",
                msg, program);
   std::exit(2);
 }
@@ -35,8 +37,11 @@ inline Options parse(int argc, char** argv) {
       if (i + 1 >= argc) usage(argv[0], (std::string(name) + " needs a value").c_str());
       return argv[++i];
     };
-    if (!std::strcmp(argv[i], "--particles"))
+    if (!std::strcmp(argv[i], "--particles")) {
       o.particles = std::stol(value("--particles"));
+      o.particles_given = true;
+    } else if (!std::strcmp(argv[i], "--scene"))
+      o.scene = value("--scene");
     else if (!std::strcmp(argv[i], "--steps"))
       o.steps = std::stoi(value("--steps"));
     else if (!std::strcmp(argv[i], "--warmup"))

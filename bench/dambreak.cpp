@@ -1,18 +1,31 @@
 // Dam-break benchmark: a water column collapsing in a static tank, timed on 1 and 2
 // threads. Prints particles, steps, seconds per step, nanoseconds per particle per step,
-// the split of the step, and a state hash (equal hashes = identical results).
+// the split of the step, a state hash (equal hashes = identical results) and the peak
+// resident memory of the process per fluid particle.
 //
 //   wake_bench_dambreak [--particles N] [--steps S] [--warmup W] [--threads 1,2]
+//                       [--scene FILE]
+//
+// Without --scene: a synthetic column (nx x 2nx x nx particles of radius 5 mm) at one end
+// of a tank four columns long. With --scene: that scene file (its static bodies through
+// Bullet, as `wake run` has them), refined or coarsened to about N fluid particles when
+// --particles is given; bench/spheric2.json is the SPHERIC-2 dam break.
 #include "bench/common.hpp"
+#include "bullet_bridge/scene_world.hpp"
 #include "coupling/simulation.hpp"
+#include "io/scene.hpp"
+
+#include <sys/resource.h>
 
 #include <omp.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -37,19 +50,52 @@ SimulationSettings damBreak(long particles) {
   return set;
 }
 
+/// The simulation a run times: the synthetic dam break, or the scene's through Bullet.
+struct Bench {
+  std::unique_ptr<Simulation> own;
+  std::unique_ptr<SceneWorld> world;
+  Simulation& sim() { return own ? *own : world->coupled().simulation(); }
+};
+
+Bench make(const Options& opt) {
+  Bench b;
+  if (opt.scene.empty()) {
+    b.own = std::make_unique<Simulation>(damBreak(opt.particles));
+    return b;
+  }
+  SceneFile scene = loadScene(opt.scene);
+  if (opt.particles_given)
+    overrideResolution(scene, std::cbrt(double(opt.particles) / estimateFluidParticles(scene.sim)));
+  b.world = std::make_unique<SceneWorld>(scene.sim, scene.bodies);
+  b.world->coupled().start();
+  return b;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const Options opt = parse(argc, argv);
-  std::printf("# Wake dam-break benchmark: %ld requested particles, %d warm-up + %d timed steps\n",
-              opt.particles, opt.warmup, opt.steps);
+  std::printf(
+      "# Wake dam-break benchmark: %s, %ld requested particles, %d warm-up + %d timed "
+      "steps\n",
+      opt.scene.empty() ? "synthetic column" : opt.scene.c_str(), opt.particles, opt.warmup,
+      opt.steps);
   std::printf("%7s %9s %9s %6s %10s %11s %8s %8s %8s %8s %8s %9s %18s\n", "threads", "fluid",
               "boundary", "steps", "s/step", "ns/p/step", "nbr%", "dens%", "force%", "bound%",
               "integ%", "sim_t[s]", "state_hash");
   double single = 0.0;
+  std::size_t most_particles = 0;
   for (int threads : opt.threads) {
     omp_set_num_threads(threads);
-    Simulation sim(damBreak(opt.particles));
+    Bench bench;
+    try {
+      bench = make(opt);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      return 1;
+    }
+    Simulation& sim = bench.sim();
+    most_particles = std::max(most_particles, sim.fluidParticles());
     for (int i = 0; i < opt.warmup; ++i)
       sim.step(1e9);
     const StepTimings before = sim.timings();
@@ -72,5 +118,11 @@ int main(int argc, char** argv) {
     else if (single > 0)
       std::printf("# speed-up on %d threads: %.2fx\n", threads, single / per_step);
   }
+  // Peak resident set of the process (what /usr/bin/time -v reports), over all runs.
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  const double peak = 1024.0 * double(usage.ru_maxrss);
+  std::printf("# peak resident memory: %.0f MiB, %.0f bytes per fluid particle\n",
+              peak / (1024.0 * 1024.0), peak / double(std::max<std::size_t>(most_particles, 1)));
   return 0;
 }

@@ -70,11 +70,13 @@ void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points,
   const int threads = omp_get_max_threads();
   // Each thread gathers the lists of one contiguous chunk of points into its own buffer;
   // the buffers are then concatenated in chunk order (independent of the thread count).
-  thread_local std::vector<std::uint32_t> local;
   std::vector<std::uint64_t> chunk_size(static_cast<std::size_t>(threads) + 1, 0);
+  if (out.chunks.size() < static_cast<std::size_t>(threads))
+    out.chunks.resize(static_cast<std::size_t>(threads));
 #pragma omp parallel num_threads(threads)
   {
     const int t = omp_get_thread_num();
+    std::vector<std::uint32_t>& local = out.chunks[static_cast<std::size_t>(t)];
     const std::size_t nt = static_cast<std::size_t>(omp_get_num_threads());
     const std::size_t lo = n * static_cast<std::size_t>(t) / nt;
     const std::size_t hi = n * static_cast<std::size_t>(t + 1) / nt;
@@ -84,7 +86,10 @@ void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points,
       const double xi = points[i][0], yi = points[i][1], zi = points[i][2];
       const std::size_t before = used;
       grid.forEachNeighborRange(points[i], [&](std::uint32_t b, std::uint32_t e) {
-        if (local.size() < used + (e - b)) local.resize(2 * (used + (e - b)) + 1024);
+        // Grown by a quarter (the buffer stays for the next steps, beside the list it is
+        // copied into: doubling left up to twice the list's size unused).
+        if (local.size() < used + (e - b))
+          local.resize(used + (e - b) + std::max<std::size_t>(used / 4, 4096));
         std::uint32_t* dst = local.data();
         for (std::uint32_t j = b; j < e; ++j) {
           const double dx = xi - points[j][0];

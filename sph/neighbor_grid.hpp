@@ -99,6 +99,9 @@ class UniformGrid {
 struct NeighborList {
   std::vector<std::uint64_t> offset;  ///< (n + 1)
   std::vector<std::uint32_t> index;   ///< (total pairs), never contains i itself
+  /// Scratch of buildNeighborList: each thread's lists before they are joined (kept for
+  /// the next build, freed with the list).
+  std::vector<std::vector<std::uint32_t>> chunks;
 
   std::size_t size() const { return offset.empty() ? 0 : offset.size() - 1; }
   std::uint64_t begin(std::size_t i) const { return offset[i]; }
