@@ -117,6 +117,23 @@ Png loadPng(const fs::path& path) {
   return png;
 }
 
+/// Calls f(pixel colour, row) for every point of `xyz` (x, y, z, x, y, z, ...) that the
+/// render's camera projects inside the image; returns how many did.
+template <class T, class F>
+std::size_t forEachProjectedPixel(const RenderResult& r, const Png& png, const std::vector<T>& xyz,
+                                  F&& f) {
+  std::size_t inside = 0;
+  for (std::size_t k = 0; k + 2 < xyz.size(); k += 3) {
+    double sx, sy, depth;
+    if (!r.camera.project(Vec3(xyz[k], xyz[k + 1], xyz[k + 2]), sx, sy, depth)) continue;
+    const int px = static_cast<int>(sx), py = static_cast<int>(sy);
+    if (px < 0 || py < 0 || px >= png.width || py >= png.height) continue;
+    ++inside;
+    f(png.at(px, py), py);
+  }
+  return inside;
+}
+
 TEST_F(RenderTest, BodySurfacesAreWrittenInTheBodyFrame) {
   SceneFile s = scene();
   SceneWorld world(s.sim, s.bodies);
@@ -180,19 +197,13 @@ TEST_F(RenderTest, FramesShowTheFluidAndTheBody) {
   const std::vector<double> x = readDoubles(file, "/frames/000000/position");
   H5Fclose(file);
   ASSERT_GT(x.size(), 300u);
-  std::size_t inside = 0, drawn = 0, blue = 0;
-  for (std::size_t k = 0; k + 2 < x.size(); k += 3) {
-    double sx, sy, depth;
-    if (!r.camera.project(Vec3(x[k], x[k + 1], x[k + 2]), sx, sy, depth)) continue;
-    const int px = static_cast<int>(sx), py = static_cast<int>(sy);
-    if (px < 0 || py < 0 || px >= png.width || py >= png.height) continue;
-    ++inside;
-    const unsigned char* c = png.at(px, py);
+  std::size_t drawn = 0, blue = 0;
+  const std::size_t inside = forEachProjectedPixel(r, png, x, [&](const unsigned char* c, int py) {
     const auto bg = renderBackground(py, png.height);
     const int diff = std::abs(c[0] - bg[0]) + std::abs(c[1] - bg[1]) + std::abs(c[2] - bg[2]);
     if (diff > 30) ++drawn;
     if (c[2] > c[0] + 40) ++blue;
-  }
+  });
   EXPECT_EQ(inside, x.size() / 3) << "the camera sees all of the fluid";
   EXPECT_GE(drawn, inside * 98 / 100);
   EXPECT_GE(blue, inside * 80 / 100);
@@ -231,16 +242,10 @@ TEST_F(RenderTest, DrawsTheWaterSurfaceWhenItWasWritten) {
       test::readDataset<float>(file, "/frames/000002/vertices", H5T_NATIVE_FLOAT);
   H5Fclose(file);
   ASSERT_GT(v.size(), 300u);
-  std::size_t inside = 0, blue = 0;
-  for (std::size_t k = 0; k + 2 < v.size(); k += 3) {
-    double sx, sy, depth;
-    if (!r.camera.project(Vec3(v[k], v[k + 1], v[k + 2]), sx, sy, depth)) continue;
-    const int px = static_cast<int>(sx), py = static_cast<int>(sy);
-    if (px < 0 || py < 0 || px >= png.width || py >= png.height) continue;
-    ++inside;
-    const unsigned char* c = png.at(px, py);
+  std::size_t blue = 0;
+  const std::size_t inside = forEachProjectedPixel(r, png, v, [&](const unsigned char* c, int) {
     if (c[2] > c[0] + 40) ++blue;
-  }
+  });
   EXPECT_EQ(inside, v.size() / 3) << "the camera sees all of the surface";
   // Vertices on the silhouette may show the body or the tank behind: most are water.
   EXPECT_GE(blue, inside * 70 / 100);
