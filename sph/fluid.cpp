@@ -118,13 +118,24 @@ void Fluid::computeFluidDensity() {
   const std::int64_t n = static_cast<std::int64_t>(state_.size());
   const Vec3* x = state_.position.data();
   const std::uint32_t* nb = neighbors_.index.data();
+  const std::uint64_t* offset = neighbors_.offset.data();
   const double self = mass_ * kernel_.value(0.0);
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
+    // Two neighbours at a time (the kernel without branches), added in list order.
+    const Lanes2 xi = Lanes2::all(x[i].x()), yi = Lanes2::all(x[i].y()), zi = Lanes2::all(x[i].z());
     double sum = 0.0;
-    const Vec3 xi = x[i];
-    for (std::uint64_t k = neighbors_.offset[i], e = neighbors_.offset[i + 1]; k < e; ++k)
-      sum += kernel_.value((xi - x[nb[k]]).norm());
+    const std::uint64_t e = offset[i + 1];
+    for (std::uint64_t k = offset[i]; k < e; k += 2) {
+      const bool both = k + 1 < e;
+      const std::uint32_t j0 = nb[k], j1 = both ? nb[k + 1] : j0;
+      Lanes2 xj, yj, zj;
+      Lanes2::gather3(x[j0].data(), x[j1].data(), xj, yj, zj);
+      const Lanes2 dx = xi - xj, dy = yi - yj, dz = zi - zj;
+      const Lanes2 w = kernel_.value(sqrt(dx * dx + dy * dy + dz * dz));
+      sum += w.lane0();
+      if (both) sum += w.lane1();
+    }
     state_.density[i] = self + mass_ * sum;
   }
 }
@@ -148,6 +159,13 @@ namespace {
 /// The pair loop of Fluid::computeAccelerations. kUniformNu: every particle has the same
 /// kinematic viscosity nu0 (one fluid: the usual case), so Morris's coefficient is
 /// nu0 (1 / rho_a + 1 / rho_b) and the per-neighbour viscosity is not read.
+///
+/// Two neighbours at a time: the kernel and the artificial viscosity's branch become masks,
+/// and each lane's terms are added to the sums in list order, so the result is the same
+/// as one neighbour at a time, bit for bit:
+///   acc -= m (P_a / rho_a^2 + P_b / rho_b^2 + Pi_ab) W'(r) / r x_ab,
+///   Pi_ab = -visc / (rho_a + rho_b) (v_ab . x_ab) / (r^2 + eps^2) where v_ab . x_ab < 0,
+///   lap += mu_ab W'(r) / r v_ab.
 template <bool kUniformNu>
 void accelerationLoop(std::int64_t n, const Vec3* x, const Vec3* v, const double* rho,
                       const double* inv_rho, const double* nu, const double* pr2,
@@ -156,27 +174,45 @@ void accelerationLoop(std::int64_t n, const Vec3* x, const Vec3* v, const double
   const std::uint32_t* nb = neighbors.index.data();
   const std::uint64_t* offset = neighbors.offset.data();
   const double nu0 = n > 0 ? nu[0] : 0.0;
+  const Lanes2 mass = Lanes2::all(m), zero = Lanes2::all(0.0);
+  const Lanes2 minus_visc = Lanes2::all(-visc), eps = Lanes2::all(eps_sq);
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
-    const Vec3 xi = x[i], vi = v[i];
-    const double rho_i = rho[i], inv_rho_i = inv_rho[i], nu_i = nu[i];
-    const double pi_term = pr2[i];
-    Vec3 acc = Vec3::Zero(), lap = Vec3::Zero();
-    for (std::uint64_t k = offset[i], e = offset[i + 1]; k < e; ++k) {
-      const std::uint32_t j = nb[k];
-      const Vec3 xij = xi - x[j];
-      const Vec3 vij = vi - v[j];
-      const double r_sq = xij.squaredNorm();
-      const double dwr = kernel.derivativeOverR(std::sqrt(r_sq));
-      double coeff = pi_term + pr2[j];
-      const double vx = vij.dot(xij);
-      if (vx < 0.0) coeff += -visc / (rho_i + rho[j]) * vx / (r_sq + eps_sq);
-      acc -= (m * coeff * dwr) * xij;
+    const Lanes2 xi = Lanes2::all(x[i].x()), yi = Lanes2::all(x[i].y()), zi = Lanes2::all(x[i].z());
+    const Lanes2 ui = Lanes2::all(v[i].x()), vi = Lanes2::all(v[i].y()), wi = Lanes2::all(v[i].z());
+    const Lanes2 rho_i = Lanes2::all(rho[i]), inv_rho_i = Lanes2::all(inv_rho[i]);
+    const Lanes2 nu_i = Lanes2::all(kUniformNu ? nu0 : nu[i]), pi_term = Lanes2::all(pr2[i]);
+    // (acc.x, acc.y), (acc.z, lap.x), (lap.y, lap.z)
+    Lanes2 acc_xy = zero, acc_z_lap_x = zero, lap_yz = zero;
+    const std::uint64_t e = offset[i + 1];
+    for (std::uint64_t k = offset[i]; k < e; k += 2) {
+      const bool both = k + 1 < e;
+      const std::uint32_t j0 = nb[k], j1 = both ? nb[k + 1] : j0;
+      Lanes2 xj, yj, zj, uj, vj, wj;
+      Lanes2::gather3(x[j0].data(), x[j1].data(), xj, yj, zj);
+      Lanes2::gather3(v[j0].data(), v[j1].data(), uj, vj, wj);
+      const Lanes2 dx = xi - xj, dy = yi - yj, dz = zi - zj;
+      const Lanes2 du = ui - uj, dv = vi - vj, dw = wi - wj;
+      const Lanes2 r_sq = dx * dx + dy * dy + dz * dz;
+      const Lanes2 dwr = kernel.derivativeOverR(sqrt(r_sq));
+      Lanes2 coeff = pi_term + Lanes2::gather(pr2, j0, j1);
+      const Lanes2 vx = du * dx + dv * dy + dw * dz;
+      coeff = select(vx < zero,
+                     coeff + minus_visc / (rho_i + Lanes2::gather(rho, j0, j1)) * vx / (r_sq + eps),
+                     coeff);
+      const Lanes2 f = mass * coeff * dwr;
       // Morris: x . grad W / |x|^2 = dW/dr / r (< 0), so v_a is drawn towards v_b.
-      const double mu =
-          kUniformNu ? nu0 * (inv_rho[j] + inv_rho_i) : nu_i * inv_rho[j] + nu[j] * inv_rho_i;
-      lap += (mu * dwr) * vij;
+      const Lanes2 inv_rho_j = Lanes2::gather(inv_rho, j0, j1);
+      const Lanes2 mu = kUniformNu ? nu_i * (inv_rho_j + inv_rho_i)
+                                   : nu_i * inv_rho_j + Lanes2::gather(nu, j0, j1) * inv_rho_i;
+      const Lanes2 g = mu * dwr;
+      // lap += g v_ab, written as lap -= -(g v_ab) (the same bits).
+      acc_xy = subtractInOrder(acc_xy, f * dx, f * dy, !both);
+      acc_z_lap_x = subtractInOrder(acc_z_lap_x, f * dz, -(g * du), !both);
+      lap_yz = subtractInOrder(lap_yz, -(g * dv), -(g * dw), !both);
     }
+    Vec3 acc(acc_xy.lane0(), acc_xy.lane1(), acc_z_lap_x.lane0());
+    const Vec3 lap(acc_z_lap_x.lane1(), lap_yz.lane0(), lap_yz.lane1());
     acc += m * lap + gravity;
     if (add) acc += add[i];
     out[i] = acc;

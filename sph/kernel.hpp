@@ -1,6 +1,7 @@
 // Cubic spline kernel (Monaghan 1992) in 3D, smoothing length H, support radius 2H.
 #pragma once
 
+#include "sph/lanes.hpp"
 #include "sph/types.hpp"
 
 namespace wake {
@@ -31,6 +32,29 @@ class CubicSplineKernel {
     if (r <= 0.0) return 0.0;
     const double t = 2.0 - q;
     return -sigma_ * 0.75 * t * t * inv_h_ / r;
+  }
+
+  /// value() of two distances at once: per lane the same operations, so the same bits.
+  Lanes2 value(Lanes2 r) const {
+    const Lanes2 q = r * Lanes2::all(inv_h_);
+    const Lanes2 inner = Lanes2::all(sigma_) * (Lanes2::all(1.0) - Lanes2::all(1.5) * q * q +
+                                                Lanes2::all(0.75) * q * q * q);
+    const Lanes2 t = Lanes2::all(2.0) - q;
+    const Lanes2 outer = Lanes2::all(sigma_) * Lanes2::all(0.25) * t * t * t;
+    return select(q < Lanes2::all(1.0), inner,
+                  select(q >= Lanes2::all(2.0), Lanes2::all(0.0), outer));
+  }
+
+  /// derivativeOverR() of two distances at once (the same bits per lane). r = 0 takes the
+  /// inner piece, as in the scalar form.
+  Lanes2 derivativeOverR(Lanes2 r) const {
+    const Lanes2 q = r * Lanes2::all(inv_h_);
+    const Lanes2 inner = Lanes2::all(sigma_) * Lanes2::all(inv_h_) * Lanes2::all(inv_h_) *
+                         (Lanes2::all(-3.0) + Lanes2::all(2.25) * q);
+    const Lanes2 t = Lanes2::all(2.0) - q;
+    const Lanes2 outer = Lanes2::all(-sigma_) * Lanes2::all(0.75) * t * t * Lanes2::all(inv_h_) / r;
+    return select(q < Lanes2::all(1.0), inner,
+                  select(q >= Lanes2::all(2.0), Lanes2::all(0.0), outer));
   }
 
   /// grad_a W(x_a - x_b) for x = x_a - x_b (1/m^4).

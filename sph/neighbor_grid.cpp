@@ -67,25 +67,31 @@ void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points,
   const std::size_t n = points.size();
   const double radius_sq = radius * radius;
   out.offset.assign(n + 1, 0);
+  out.upper_start.resize(n);
+  out.upper_count.resize(n);
+  out.lower_count.resize(n);
   const int threads = omp_get_max_threads();
-  // Each thread gathers the lists of one contiguous chunk of points into its own buffer;
-  // the buffers are then concatenated in chunk order (independent of the thread count).
-  std::vector<std::uint64_t> chunk_size(static_cast<std::size_t>(threads) + 1, 0);
   if (out.chunks.size() < static_cast<std::size_t>(threads))
     out.chunks.resize(static_cast<std::size_t>(threads));
+  // Largest j - i of a pair i < j: how far back the earlier neighbours of a point lie.
+  std::vector<std::size_t> spans(static_cast<std::size_t>(threads), 0);
 #pragma omp parallel num_threads(threads)
   {
-    const int t = omp_get_thread_num();
-    std::vector<std::uint32_t>& local = out.chunks[static_cast<std::size_t>(t)];
+    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
     const std::size_t nt = static_cast<std::size_t>(omp_get_num_threads());
-    const std::size_t lo = n * static_cast<std::size_t>(t) / nt;
-    const std::size_t hi = n * static_cast<std::size_t>(t + 1) / nt;
-    // Branch-free append: write every candidate, advance the cursor only for neighbours.
-    std::size_t used = 0;
+    auto chunk_begin = [&](std::size_t k) { return n * k / nt; };
+    const std::size_t lo = chunk_begin(t), hi = chunk_begin(t + 1);
+
+    // 1. Each thread lists the later neighbours of its points (every pair tested once).
+    //    Branch-free append: write every candidate, advance the cursor only for neighbours.
+    std::vector<std::uint32_t>& local = out.chunks[t];
+    std::size_t used = 0, span = 0;
     for (std::size_t i = lo; i < hi; ++i) {
       const double xi = points[i][0], yi = points[i][1], zi = points[i][2];
       const std::size_t before = used;
       grid.forEachNeighborRange(points[i], [&](std::uint32_t b, std::uint32_t e) {
+        if (b <= i) b = static_cast<std::uint32_t>(i + 1);  // the ranges ascend: j > i only
+        if (b >= e) return;
         // Grown by a quarter (the buffer stays for the next steps, beside the list it is
         // copied into: doubling left up to twice the list's size unused).
         if (local.size() < used + (e - b))
@@ -96,24 +102,56 @@ void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points,
           const double dy = yi - points[j][1];
           const double dz = zi - points[j][2];
           dst[used] = j;
-          used += static_cast<std::size_t>((dx * dx + dy * dy + dz * dz < radius_sq) & (j != i));
+          used += static_cast<std::size_t>(dx * dx + dy * dy + dz * dz < radius_sq);
         }
       });
-      out.offset[i + 1] = used - before;
+      out.upper_start[i] = before;
+      out.upper_count[i] = static_cast<std::uint32_t>(used - before);
+      out.lower_count[i] = 0;
+      if (used > before) span = std::max<std::size_t>(span, local[used - 1] - i);
     }
-    chunk_size[static_cast<std::size_t>(t) + 1] = used;
+    spans[t] = span;
+#pragma omp barrier
+    // 2. The earlier neighbours of point i are the j < i whose later lists hold i: scan
+    //    the lists of j in [lo - span, hi) in ascending j, keeping the entries in [lo, hi).
+    const std::size_t reach = *std::max_element(spans.begin(), spans.end());
+    auto for_each_earlier = [&](auto&& f) {
+      const std::size_t first = lo > reach ? lo - reach : 0;
+      if (first >= hi) return;
+      std::size_t c = 0;
+      while (chunk_begin(c + 1) <= first)
+        ++c;
+      for (std::size_t j = first; j < hi; ++j) {
+        while (chunk_begin(c + 1) <= j)
+          ++c;
+        const std::uint32_t* later = out.chunks[c].data() + out.upper_start[j];
+        for (std::uint32_t k = 0, m = out.upper_count[j]; k < m; ++k) {
+          const std::uint32_t i = later[k];
+          if (i >= hi) break;  // ascending
+          if (i >= lo) f(static_cast<std::uint32_t>(j), i);
+        }
+      }
+    };
+    for_each_earlier([&](std::uint32_t, std::uint32_t i) { ++out.lower_count[i]; });
+    for (std::size_t i = lo; i < hi; ++i)
+      out.offset[i + 1] = out.lower_count[i] + out.upper_count[i];
 #pragma omp barrier
 #pragma omp single
     {
       for (std::size_t i = 0; i < n; ++i)
         out.offset[i + 1] += out.offset[i];
-      for (std::size_t k = 0; k < nt; ++k)
-        chunk_size[k + 1] += chunk_size[k];
       out.index.resize(out.offset[n]);
     }
-    if (used > 0)
-      std::memcpy(out.index.data() + chunk_size[static_cast<std::size_t>(t)], local.data(),
-                  used * sizeof(std::uint32_t));
+    // 3. Each list: its earlier neighbours (ascending j), then its later ones.
+    for (std::size_t i = lo; i < hi; ++i)
+      out.lower_count[i] = 0;
+    std::uint32_t* index = out.index.data();
+    for_each_earlier(
+        [&](std::uint32_t j, std::uint32_t i) { index[out.offset[i] + out.lower_count[i]++] = j; });
+    for (std::size_t i = lo; i < hi; ++i)
+      if (out.upper_count[i] > 0)
+        std::memcpy(index + out.offset[i] + out.lower_count[i], local.data() + out.upper_start[i],
+                    out.upper_count[i] * sizeof(std::uint32_t));
   }
 }
 

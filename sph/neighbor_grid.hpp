@@ -99,18 +99,24 @@ class UniformGrid {
 struct NeighborList {
   std::vector<std::uint64_t> offset;  ///< (n + 1)
   std::vector<std::uint32_t> index;   ///< (total pairs), never contains i itself
-  /// Scratch of buildNeighborList: each thread's lists before they are joined (kept for
-  /// the next build, freed with the list).
+  /// Scratch of buildNeighborList, kept for the next build and freed with the list: each
+  /// thread's lists of the later neighbours (j > i) of its points, where those of point i
+  /// start (upper_start, into its thread's chunk) and how many there are (upper_count),
+  /// and the number of earlier neighbours (lower_count).
   std::vector<std::vector<std::uint32_t>> chunks;
+  std::vector<std::uint64_t> upper_start;  ///< (n)
+  std::vector<std::uint32_t> upper_count;  ///< (n)
+  std::vector<std::uint32_t> lower_count;  ///< (n)
 
   std::size_t size() const { return offset.empty() ? 0 : offset.size() - 1; }
   std::uint64_t begin(std::size_t i) const { return offset[i]; }
   std::uint64_t end(std::size_t i) const { return offset[i + 1]; }
 };
 
-/// Builds the lists of all sorted points within `radius` (strictly closer) of each point.
-/// `points` must be in the grid's sorted order. Gather-parallel (OpenMP); the result does
-/// not depend on the number of threads.
+/// Builds the lists of all sorted points within `radius` (strictly closer) of each point,
+/// each list in ascending order. `points` must be in the grid's sorted order. Each pair is
+/// tested once (from its lower index); the earlier neighbours of a point are then read from
+/// the others' lists. OpenMP; the result does not depend on the number of threads.
 void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
                        NeighborList& out);
 

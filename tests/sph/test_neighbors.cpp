@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <functional>
 #include <random>
 #include <set>
 
@@ -20,30 +21,50 @@ std::vector<std::set<std::uint32_t>> bruteForce(const std::vector<Vec3>& x, doub
   return out;
 }
 
-/// Sorts the points by cell, builds lists, and compares with brute force on sorted points.
+/// Sorts the points by cell, builds lists, and compares with brute force on sorted points:
+/// with cells of the radius (reach 1) and of half of it (reach 2), on 1, 2, 3 and 7 threads
+/// (more threads than points included). Each list must ascend and be the same on any
+/// number of threads.
 void expectMatchesBruteForce(std::vector<Vec3> x, const Aabb& domain, double r) {
-  UniformGrid grid(domain, r);
-  std::vector<std::uint32_t> order;
-  grid.sort(x, order);
-  ASSERT_EQ(order.size(), x.size());
-  std::vector<Vec3> sorted(x.size());
-  for (std::size_t k = 0; k < x.size(); ++k)
-    sorted[k] = x[order[k]];
-  // order is a permutation
-  std::vector<std::uint32_t> check = order;
-  std::sort(check.begin(), check.end());
-  for (std::size_t k = 0; k < check.size(); ++k)
-    ASSERT_EQ(check[k], k);
+  for (int reach : {1, 2}) {
+    UniformGrid grid(domain, r / reach, UniformGrid::kMaxCells, reach);
+    std::vector<std::uint32_t> order;
+    grid.sort(x, order);
+    ASSERT_EQ(order.size(), x.size());
+    std::vector<Vec3> sorted(x.size());
+    for (std::size_t k = 0; k < x.size(); ++k)
+      sorted[k] = x[order[k]];
+    // order is a permutation
+    std::vector<std::uint32_t> check = order;
+    std::sort(check.begin(), check.end());
+    for (std::size_t k = 0; k < check.size(); ++k)
+      ASSERT_EQ(check[k], k);
 
-  NeighborList list;
-  buildNeighborList(grid, sorted, r, list);
-  const auto expected = bruteForce(sorted, r);
-  ASSERT_EQ(list.size(), sorted.size());
-  for (std::size_t i = 0; i < sorted.size(); ++i) {
-    std::set<std::uint32_t> got(list.index.begin() + list.begin(i),
-                                list.index.begin() + list.end(i));
-    EXPECT_EQ(got.size(), list.end(i) - list.begin(i)) << "duplicates for " << i;
-    EXPECT_EQ(got, expected[i]) << "particle " << i;
+    const auto expected = bruteForce(sorted, r);
+    NeighborList first;
+    const int threads_before = omp_get_max_threads();
+    for (int threads : {1, 2, 3, 7}) {
+      omp_set_num_threads(threads);
+      NeighborList list;
+      buildNeighborList(grid, sorted, r, list);
+      ASSERT_EQ(list.size(), sorted.size());
+      for (std::size_t i = 0; i < sorted.size(); ++i) {
+        const std::vector<std::uint32_t> got(list.index.begin() + list.begin(i),
+                                             list.index.begin() + list.end(i));
+        EXPECT_TRUE(std::adjacent_find(got.begin(), got.end(), std::greater_equal<>()) == got.end())
+            << "list of " << i << " does not strictly ascend (reach " << reach << ", " << threads
+            << " threads)";
+        EXPECT_EQ(std::set<std::uint32_t>(got.begin(), got.end()), expected[i])
+            << "particle " << i << ", reach " << reach << ", " << threads << " threads";
+      }
+      if (threads == 1) {
+        first = list;
+      } else {
+        EXPECT_EQ(list.offset, first.offset) << threads << " threads";
+        EXPECT_EQ(list.index, first.index) << threads << " threads";
+      }
+    }
+    omp_set_num_threads(threads_before);
   }
 }
 
