@@ -68,6 +68,22 @@ struct SamplePressure {
   std::vector<std::vector<double>> p_rho2;
 };
 
+/// The (fluid particle, sample) pairs within the kernel support of one step: found once by
+/// Boundaries::addWallTerms, read by computeSamplePressure and addWallPressure, so the
+/// walls' three sums search the samples once. Scratch of the step.
+struct WallPairs {
+  /// Per chunk of Boundaries::kChunk particles, for each particle in order and each
+  /// sample set it has samples of within the support (the static set first, then the
+  /// moving bodies in order): the set's number (0 static, m + 1 moving body m), the count
+  /// c, then the c sample indices, ascending.
+  std::vector<std::vector<std::uint32_t>> chunk;
+  std::vector<std::uint32_t> end;  ///< (n) where each particle's part of its chunk ends
+  /// Per set, the particles within the support of each sample, ascending: those of
+  /// sample k are particle[set][offset[set][k] .. offset[set][k + 1]).
+  std::vector<std::vector<std::uint32_t>> offset, particle;
+  std::size_t particles = 0;  ///< n when found
+};
+
 /// Contact of one fluid particle with one body: its centre is closer than the fluid
 /// radius to the body's exact surface.
 struct Contact {
@@ -130,8 +146,10 @@ class Boundaries {
   /// - `reaction` (bodies): the shear's force and torque (about the centre of mass) on
   ///   each two-way body; zero for the others. Summed in fixed particle chunks: the same
   ///   bits on any number of threads.
+  /// - `pairs`: the pairs it visited, for computeSamplePressure and addWallPressure.
   void addWallTerms(const Fluid& fluid, const BodyPlacement& at, std::vector<double>& density,
-                    std::vector<Vec3>& shear, std::vector<Wrench>& reaction) const;
+                    std::vector<Vec3>& shear, std::vector<Wrench>& reaction,
+                    WallPairs& pairs) const;
 
   /// Each sample's pressure, extrapolated from the fluid near it (Adami, Hu & Adams 2012,
   /// "A generalized wall boundary condition for SPH"): the samples stand for fluid
@@ -143,8 +161,9 @@ class Boundaries {
   /// fluid's own pressure: a tank of fluid at rest stays at rest. rho_k = the fluid's
   /// equation of state inverted at P_k. Call after the fluid's pressure is known (this
   /// step's densities with the walls' share) and before addWallPressure; written to `out`.
+  /// `pairs`: this step's, from addWallTerms.
   void computeSamplePressure(const Fluid& fluid, const BodyPlacement& at, const Vec3& gravity,
-                             SamplePressure& out) const;
+                             WallPairs& pairs, SamplePressure& out) const;
 
   /// The walls' pressure force, once the samples' pressure is known: the samples are
   /// neighbours in the fluid's symmetric pressure term,
@@ -154,8 +173,9 @@ class Boundaries {
   /// n when empty) and the opposite force and its torque (about the centre of mass) to
   /// each two-way body's `reaction`. Summed in fixed particle chunks: the same bits on
   /// any number of threads.
-  void addWallPressure(const Fluid& fluid, const BodyPlacement& at, const SamplePressure& pressure,
-                       std::vector<Vec3>& extra, std::vector<Wrench>& reaction) const;
+  void addWallPressure(const Fluid& fluid, const BodyPlacement& at, const WallPairs& pairs,
+                       const SamplePressure& pressure, std::vector<Vec3>& extra,
+                       std::vector<Wrench>& reaction) const;
 
   /// Most bodies one fluid particle is in contact with at once (the nearest are kept).
   static constexpr std::size_t kMaxContacts = 8;
@@ -253,16 +273,23 @@ class Boundaries {
   /// sum_k w_k (u - omega x x_k) to `shear` and, when `moment` is given,
   /// sum_k w_k x_k x (u - omega x x_k) to it (w_k of addWallTerms, 1/s).
   /// addDensity and addWallTerms: shear and reaction may be null (density only).
+  /// `pairs` (may be null): records the pairs visited.
   void wallPass(const Fluid& fluid, const BodyPlacement& at, std::vector<double>& density,
-                std::vector<Vec3>* shear, std::vector<Wrench>* reaction) const;
+                std::vector<Vec3>* shear, std::vector<Wrench>* reaction, WallPairs* pairs) const;
+  /// `record` (may be null): the samples within the support are appended to it.
   double wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u, const Vec3& omega,
-                  Vec3& shear, Vec3* moment) const;
-  /// sum_k V_k (pr2 + P_k / rho_k^2) grad W_ak over one set at p (set space), and its
-  /// moment sum_k x_k x (...) when asked (two-way bodies).
+                  Vec3& shear, Vec3* moment, std::vector<std::uint32_t>* record) const;
+  /// sum_k V_k (pr2 + P_k / rho_k^2) grad W_ak over the `count` samples `near` of one set at
+  /// p (set space), and its moment sum_k x_k x (...) when asked (two-way bodies).
   Vec3 pressureSum(const SampleSet& set, const std::vector<double>& p_rho2, const Vec3& p,
-                   double pr2, Vec3* moment) const;
+                   double pr2, const std::uint32_t* near, std::size_t count, Vec3* moment) const;
+  /// The sample lists of `pairs` (sample -> particles) from its particle lists.
+  void transposePairs(WallPairs& pairs) const;
   void samplePressure(const Fluid& fluid, const SampleSet& set, const Mat3& rotation,
-                      const Vec3& origin, const Vec3& gravity, std::vector<double>& p_rho2) const;
+                      const Vec3& origin, const Vec3& gravity,
+                      const std::vector<std::uint32_t>& offset,
+                      const std::vector<std::uint32_t>& particle,
+                      std::vector<double>& p_rho2) const;
 
   FluidParams fluid_;
   CubicSplineKernel kernel_;

@@ -15,17 +15,18 @@ namespace wake {
 
 void Boundaries::addDensity(const Fluid& fluid, const BodyPlacement& at,
                             std::vector<double>& density) const {
-  wallPass(fluid, at, density, nullptr, nullptr);
+  wallPass(fluid, at, density, nullptr, nullptr, nullptr);
 }
 
 void Boundaries::addWallTerms(const Fluid& fluid, const BodyPlacement& at,
                               std::vector<double>& density, std::vector<Vec3>& shear,
-                              std::vector<Wrench>& reaction) const {
-  wallPass(fluid, at, density, &shear, &reaction);
+                              std::vector<Wrench>& reaction, WallPairs& pairs) const {
+  wallPass(fluid, at, density, &shear, &reaction, &pairs);
 }
 
 double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u,
-                            const Vec3& omega, Vec3& shear, Vec3* moment) const {
+                            const Vec3& omega, Vec3& shear, Vec3* moment,
+                            std::vector<std::uint32_t>* record) const {
   const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
   const double rb = radius_;
   const double two_nu = 2.0 * nu;
@@ -35,6 +36,7 @@ double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, cons
       const Vec3 d = p - set.position[k];
       const double d_sq = d.squaredNorm();
       if (d_sq >= support_sq) continue;
+      if (record) record->push_back(k);
       const double r = std::sqrt(d_sq);
       sum += set.volume[k] * kernel_.value(r);
       if (!(nu > 0.0)) continue;
@@ -55,25 +57,26 @@ double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, cons
 }
 
 Vec3 Boundaries::pressureSum(const SampleSet& set, const std::vector<double>& p_rho2, const Vec3& p,
-                             double pr2, Vec3* moment) const {
+                             double pr2, const std::uint32_t* near, std::size_t count,
+                             Vec3* moment) const {
   const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
   Vec3 sum = Vec3::Zero();
-  set.grid.forEachRangeWithin(p, set.density_reach, [&](std::uint32_t lo, std::uint32_t hi) {
-    for (std::uint32_t k = lo; k < hi; ++k) {
-      const Vec3 d = p - set.position[k];
-      const double d_sq = d.squaredNorm();
-      if (d_sq >= support_sq) continue;
-      const Vec3 g =
-          ((pr2 + p_rho2[k]) * set.volume[k] * kernel_.derivativeOverR(std::sqrt(d_sq))) * d;
-      sum += g;
-      if (moment) *moment += set.position[k].cross(g);
-    }
-  });
+  for (std::size_t t = 0; t < count; ++t) {
+    const std::uint32_t k = near[t];
+    const Vec3 d = p - set.position[k];
+    const double d_sq = d.squaredNorm();
+    if (d_sq >= support_sq) continue;
+    const Vec3 g =
+        ((pr2 + p_rho2[k]) * set.volume[k] * kernel_.derivativeOverR(std::sqrt(d_sq))) * d;
+    sum += g;
+    if (moment) *moment += set.position[k].cross(g);
+  }
   return sum;
 }
 
 void Boundaries::wallPass(const Fluid& fluid, const BodyPlacement& at, std::vector<double>& density,
-                          std::vector<Vec3>* shear, std::vector<Wrench>* reaction) const {
+                          std::vector<Vec3>* shear, std::vector<Wrench>* reaction,
+                          WallPairs* pairs) const {
   const FluidState& st = fluid.state();
   const std::vector<Vec3>& x = st.position;
   const double rho0 = fluid_.rest_density;
@@ -92,10 +95,33 @@ void Boundaries::wallPass(const Fluid& fluid, const BodyPlacement& at, std::vect
     two_way = two_way || (with_shear && bodies_[m.body].settings.twoWay());
   const std::size_t chunks = (n + kChunk - 1) / kChunk;
   if (two_way) chunk_reaction_.assign(chunks * nb, Wrench{});
+  if (pairs) {
+    if (pairs->chunk.size() < chunks) pairs->chunk.resize(chunks);
+    pairs->end.resize(n);
+    pairs->particles = n;
+  }
   const Vec3 zero = Vec3::Zero();
 #pragma omp parallel for schedule(static)
   for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
     const std::size_t end = std::min(n, (c + 1) * kChunk);
+    // The pairs: a segment (set number, count, samples) per set with samples near.
+    std::vector<std::uint32_t>* record = pairs ? &pairs->chunk[c] : nullptr;
+    if (record) record->clear();
+    std::size_t head = 0;
+    auto open = [&](std::uint32_t set) {
+      if (!record) return;
+      record->push_back(set);
+      head = record->size();
+      record->push_back(0);
+    };
+    auto close = [&] {
+      if (!record) return;
+      const std::size_t count = record->size() - head - 1;
+      if (count == 0)
+        record->resize(head - 1);
+      else
+        (*record)[head] = static_cast<std::uint32_t>(count);
+    };
     for (std::size_t i = c * kChunk; i < end; ++i) {
       const Vec3 xi = x[i], vi = st.velocity[i];
       const double nu = with_shear ? st.kinematic_viscosity[i] : 0.0;
@@ -103,20 +129,25 @@ void Boundaries::wallPass(const Fluid& fluid, const BodyPlacement& at, std::vect
       Vec3 a = Vec3::Zero();
       if (has_static && (static_.near[static_.grid.cellIndex(xi)] & kNearDensity)) {
         Vec3 s = Vec3::Zero();
-        sum += wallSums(static_, xi, nu, vi, zero, s, nullptr);
+        open(0);
+        sum += wallSums(static_, xi, nu, vi, zero, s, nullptr, record);
+        close();
         a -= s;
       }
       if (at.moving_reach.contains(xi)) {
         for (const MovingBody& m : moving_) {
           const BodyFrame& f = at[m.body];
           if (!f.world_reach.contains(xi)) continue;
+          const std::uint32_t set = static_cast<std::uint32_t>(&m - moving_.data()) + 1;
           const Mat3 rt = f.rotation.transpose();
           const Vec3 p = rt * (xi - f.pose.position);
           if (!m.samples.reach_box.contains(p)) continue;
           const bool react = nu > 0.0 && bodies_[m.body].settings.twoWay();
           Vec3 s = Vec3::Zero(), moment = Vec3::Zero();
+          open(set);
           sum += wallSums(m.samples, p, nu, rt * (vi - f.linear_velocity), rt * f.angular_velocity,
-                          s, react ? &moment : nullptr);
+                          s, react ? &moment : nullptr, record);
+          close();
           const Vec3 force = f.rotation * s;  // per unit fluid mass, on the body
           a -= force;
           if (react) {
@@ -128,6 +159,7 @@ void Boundaries::wallPass(const Fluid& fluid, const BodyPlacement& at, std::vect
       }
       density[i] += rho0 * sum;
       if (with_shear) (*shear)[i] = a;
+      if (record) pairs->end[i] = static_cast<std::uint32_t>(record->size());
     }
   }
   if (!two_way) return;
@@ -139,8 +171,8 @@ void Boundaries::wallPass(const Fluid& fluid, const BodyPlacement& at, std::vect
 }
 
 void Boundaries::addWallPressure(const Fluid& fluid, const BodyPlacement& at,
-                                 const SamplePressure& pressure, std::vector<Vec3>& extra,
-                                 std::vector<Wrench>& reaction) const {
+                                 const WallPairs& pairs, const SamplePressure& pressure,
+                                 std::vector<Vec3>& extra, std::vector<Wrench>& reaction) const {
   const FluidState& st = fluid.state();
   const std::size_t n = st.size(), nb = bodies_.size();
   if (n == 0 || nb == 0) return;
@@ -149,10 +181,11 @@ void Boundaries::addWallPressure(const Fluid& fluid, const BodyPlacement& at,
   for (std::size_t m = 0; m < moving_.size() && ready; ++m)
     ready = p_rho2[m + 1].size() == moving_[m].samples.position.size();
   if (!ready) throw std::logic_error("Boundaries::addWallPressure before computeSamplePressure");
+  if (pairs.particles != n)
+    throw std::logic_error("Boundaries::addWallPressure before addWallTerms");
   if (extra.empty()) extra.assign(n, Vec3::Zero());
   const double rho0 = fluid_.rest_density;
   const double mass = fluid.particleMass();
-  const bool has_static = !static_.position.empty();
   bool two_way = false;
   for (const MovingBody& m : moving_)
     two_way = two_way || bodies_[m.body].settings.twoWay();
@@ -161,29 +194,32 @@ void Boundaries::addWallPressure(const Fluid& fluid, const BodyPlacement& at,
 #pragma omp parallel for schedule(static)
   for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
     const std::size_t end = std::min(n, (c + 1) * kChunk);
+    const std::uint32_t* record = pairs.chunk[c].data();
+    std::size_t pos = 0;
     for (std::size_t i = c * kChunk; i < end; ++i) {
       const Vec3 xi = st.position[i];
       const double pr2 = st.pressure[i] / (st.density[i] * st.density[i]);
       Vec3 a = Vec3::Zero();
-      if (has_static && (static_.near[static_.grid.cellIndex(xi)] & kNearDensity))
-        a -= pressureSum(static_, p_rho2[0], xi, pr2, nullptr);
-      if (at.moving_reach.contains(xi)) {
-        for (std::size_t mi = 0; mi < moving_.size(); ++mi) {
-          const MovingBody& m = moving_[mi];
-          const BodyFrame& f = at[m.body];
-          if (!f.world_reach.contains(xi)) continue;
-          const Vec3 p = f.rotation.transpose() * (xi - f.pose.position);
-          if (!m.samples.reach_box.contains(p)) continue;
-          const bool react = bodies_[m.body].settings.twoWay();
-          Vec3 moment = Vec3::Zero();
-          const Vec3 sum = f.rotation * pressureSum(m.samples, p_rho2[mi + 1], p, pr2,
-                                                    react ? &moment : nullptr);
-          a -= sum;
-          if (react) {
-            Wrench& w = chunk_reaction_[c * nb + m.body];
-            w.force += (mass * rho0) * sum;
-            w.torque += (mass * rho0) * (f.rotation * moment);
-          }
+      // The segments of addWallTerms: the static set first, then the moving bodies.
+      for (; pos < pairs.end[i]; pos += 2 + record[pos + 1]) {
+        const std::uint32_t set = record[pos], count = record[pos + 1];
+        const std::uint32_t* near = record + pos + 2;
+        if (set == 0) {
+          a -= pressureSum(static_, p_rho2[0], xi, pr2, near, count, nullptr);
+          continue;
+        }
+        const MovingBody& m = moving_[set - 1];
+        const BodyFrame& f = at[m.body];
+        const Vec3 p = f.rotation.transpose() * (xi - f.pose.position);
+        const bool react = bodies_[m.body].settings.twoWay();
+        Vec3 moment = Vec3::Zero();
+        const Vec3 sum = f.rotation * pressureSum(m.samples, p_rho2[set], p, pr2, near, count,
+                                                  react ? &moment : nullptr);
+        a -= sum;
+        if (react) {
+          Wrench& w = chunk_reaction_[c * nb + m.body];
+          w.force += (mass * rho0) * sum;
+          w.torque += (mass * rho0) * (f.rotation * moment);
         }
       }
       extra[i] += rho0 * a;
@@ -198,46 +234,86 @@ void Boundaries::addWallPressure(const Fluid& fluid, const BodyPlacement& at,
     }
 }
 
+void Boundaries::transposePairs(WallPairs& pairs) const {
+  const std::size_t sets = moving_.size() + 1, n = pairs.particles;
+  pairs.offset.resize(sets);
+  pairs.particle.resize(sets);
+  for (std::size_t s = 0; s < sets; ++s)
+    pairs.offset[s].assign((s == 0 ? static_ : moving_[s - 1].samples).position.size() + 1, 0u);
+  // Visits every pair in particle order.
+  auto for_each_pair = [&](auto&& f) {
+    for (std::size_t c = 0; c * kChunk < n; ++c) {
+      const std::uint32_t* record = pairs.chunk[c].data();
+      std::size_t pos = 0;
+      for (std::size_t i = c * kChunk, end = std::min(n, (c + 1) * kChunk); i < end; ++i)
+        for (; pos < pairs.end[i]; pos += 2 + record[pos + 1])
+          for (std::uint32_t t = 0; t < record[pos + 1]; ++t)
+            f(record[pos], record[pos + 2 + t], static_cast<std::uint32_t>(i));
+    }
+  };
+  for_each_pair([&](std::uint32_t s, std::uint32_t k, std::uint32_t) { ++pairs.offset[s][k + 1]; });
+  for (std::size_t s = 0; s < sets; ++s) {
+    std::vector<std::uint32_t>& off = pairs.offset[s];
+    for (std::size_t k = 1; k < off.size(); ++k)
+      off[k] += off[k - 1];
+    pairs.particle[s].resize(off.back());
+  }
+  // offset[k] serves as sample k's cursor, then is restored.
+  for_each_pair([&](std::uint32_t s, std::uint32_t k, std::uint32_t i) {
+    pairs.particle[s][pairs.offset[s][k]++] = i;
+  });
+  for (std::size_t s = 0; s < sets; ++s) {
+    std::vector<std::uint32_t>& off = pairs.offset[s];
+    for (std::size_t k = off.size() - 1; k > 0; --k)
+      off[k] = off[k - 1];
+    off[0] = 0;
+  }
+}
+
 void Boundaries::computeSamplePressure(const Fluid& fluid, const BodyPlacement& at,
-                                       const Vec3& gravity, SamplePressure& out) const {
+                                       const Vec3& gravity, WallPairs& pairs,
+                                       SamplePressure& out) const {
+  if (pairs.particles != fluid.state().size())
+    throw std::logic_error("Boundaries::computeSamplePressure before addWallTerms");
+  transposePairs(pairs);
   out.p_rho2.resize(moving_.size() + 1);
-  samplePressure(fluid, static_, Mat3::Identity(), Vec3::Zero(), gravity, out.p_rho2[0]);
+  samplePressure(fluid, static_, Mat3::Identity(), Vec3::Zero(), gravity, pairs.offset[0],
+                 pairs.particle[0], out.p_rho2[0]);
   for (std::size_t m = 0; m < moving_.size(); ++m) {
     const BodyFrame& f = at[moving_[m].body];
     samplePressure(fluid, moving_[m].samples, f.rotation, f.pose.position, gravity,
-                   out.p_rho2[m + 1]);
+                   pairs.offset[m + 1], pairs.particle[m + 1], out.p_rho2[m + 1]);
   }
 }
 
 void Boundaries::samplePressure(const Fluid& fluid, const SampleSet& set, const Mat3& rotation,
                                 const Vec3& origin, const Vec3& gravity,
+                                const std::vector<std::uint32_t>& offset,
+                                const std::vector<std::uint32_t>& particle,
                                 std::vector<double>& p_rho2) const {
   const std::size_t n = set.position.size();
   p_rho2.assign(n, 0.0);
   const FluidState& st = fluid.state();
   if (st.size() == 0 || n == 0) return;
-  const UniformGrid& grid = fluid.grid();
   const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
-  const Aabb reach = fluid.particleBounds().grown(kernel_.supportRadius());
   const std::int64_t count = static_cast<std::int64_t>(n);
 #pragma omp parallel for schedule(static)
   for (std::int64_t k = 0; k < count; ++k) {
+    if (offset[k] == offset[k + 1]) continue;  // no fluid near: no pressure
     const Vec3 xk = rotation * set.position[k] + origin;
-    if (!reach.contains(xk)) continue;
     double w_sum = 0.0, p_sum = 0.0;
     Vec3 rise = Vec3::Zero();  // sum_a rho_a (x_k - x_a) W_ka
-    grid.forEachNeighborRange(xk, [&](std::uint32_t lo, std::uint32_t hi) {
-      for (std::uint32_t a = lo; a < hi; ++a) {
-        const Vec3 d = xk - st.position[a];
-        const double d_sq = d.squaredNorm();
-        if (d_sq >= support_sq) continue;
-        const double w = kernel_.value(std::sqrt(d_sq));
-        w_sum += w;
-        p_sum += st.pressure[a] * w;
-        rise += (st.density[a] * w) * d;
-      }
-    });
-    if (w_sum == 0.0) continue;  // no fluid near: no pressure
+    for (std::uint32_t t = offset[k]; t < offset[k + 1]; ++t) {
+      const std::uint32_t a = particle[t];
+      const Vec3 d = xk - st.position[a];
+      const double d_sq = d.squaredNorm();
+      if (d_sq >= support_sq) continue;
+      const double w = kernel_.value(std::sqrt(d_sq));
+      w_sum += w;
+      p_sum += st.pressure[a] * w;
+      rise += (st.density[a] * w) * d;
+    }
+    if (w_sum == 0.0) continue;
     const double p = std::max(0.0, (p_sum + gravity.dot(rise)) / w_sum);
     if (p == 0.0) continue;
     const double rho = fluid_.densityAt(p);

@@ -326,16 +326,17 @@ void Simulation::computeFluidForces() {
   t0 = Clock::now();
   // The walls' density share and viscous shear (their part of the fluid's sums).
   boundaries_->addWallTerms(*fluid_, work_.placed, st.density, work_.wall_shear,
-                            work_.wall_reaction);
+                            work_.wall_reaction, work_.wall_pairs);
   timings_.boundary += secondsSince(t0);
   t0 = Clock::now();
   fluid_->computePressure();
   timings_.density += secondsSince(t0);
   t0 = Clock::now();
   // The walls' pressure force: the samples at the fluid's pressure there.
-  boundaries_->computeSamplePressure(*fluid_, work_.placed, model_.gravity, work_.sample_pressure);
-  boundaries_->addWallPressure(*fluid_, work_.placed, work_.sample_pressure, work_.wall_shear,
-                               work_.wall_reaction);
+  boundaries_->computeSamplePressure(*fluid_, work_.placed, model_.gravity, work_.wall_pairs,
+                                     work_.sample_pressure);
+  boundaries_->addWallPressure(*fluid_, work_.placed, work_.wall_pairs, work_.sample_pressure,
+                               work_.wall_shear, work_.wall_reaction);
   timings_.boundary += secondsSince(t0);
 
   t0 = Clock::now();

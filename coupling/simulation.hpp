@@ -286,6 +286,7 @@ class Simulation {
     std::vector<Vec3> wall_shear;                  // (n) the walls' viscous shear, m/s^2
     std::vector<Wrench> wall_reaction;             // (bodies) its reaction on two-way bodies
     SamplePressure sample_pressure;                // the boundary samples' pressure
+    WallPairs wall_pairs;                          // the step's (particle, sample) pairs
     BodyPlacement placed;  // the bodies placed for the current stage (now, predicted, final)
   } work_;
   std::optional<HealthError> failure_;  // the error that stopped the run

@@ -50,6 +50,10 @@ struct Lanes2 {
   /// Masks: all bits set in a lane where the comparison holds.
   friend Lanes2 operator<(Lanes2 a, Lanes2 b) { return {_mm_cmplt_pd(a.v, b.v)}; }
   friend Lanes2 operator>=(Lanes2 a, Lanes2 b) { return {_mm_cmpge_pd(a.v, b.v)}; }
+  friend Lanes2 operator>(Lanes2 a, Lanes2 b) { return {_mm_cmpgt_pd(a.v, b.v)}; }
+  friend Lanes2 operator&(Lanes2 a, Lanes2 b) { return {_mm_and_pd(a.v, b.v)}; }
+  /// The mask of the lanes in use: both, or lane 0 only.
+  static Lanes2 valid(bool both) { return {_mm_castsi128_pd(_mm_set_epi64x(both ? -1 : 0, -1))}; }
   /// Per lane: `mask` set ? a : b.
   friend Lanes2 select(Lanes2 mask, Lanes2 a, Lanes2 b) {
     return {_mm_or_pd(_mm_and_pd(mask.v, a.v), _mm_andnot_pd(mask.v, b.v))};
@@ -98,6 +102,13 @@ struct Lanes2 {
   friend Lanes2 operator>=(Lanes2 a, Lanes2 b) {
     return {{mask(a.v[0] >= b.v[0]), mask(a.v[1] >= b.v[1])}};
   }
+  friend Lanes2 operator>(Lanes2 a, Lanes2 b) {
+    return {{mask(a.v[0] > b.v[0]), mask(a.v[1] > b.v[1])}};
+  }
+  friend Lanes2 operator&(Lanes2 a, Lanes2 b) {
+    return {{mask(isSet(a.v[0]) && isSet(b.v[0])), mask(isSet(a.v[1]) && isSet(b.v[1]))}};
+  }
+  static Lanes2 valid(bool both) { return {{mask(true), mask(both)}}; }
   friend Lanes2 select(Lanes2 m, Lanes2 a, Lanes2 b) {
     return {{isSet(m.v[0]) ? a.v[0] : b.v[0], isSet(m.v[1]) ? a.v[1] : b.v[1]}};
   }
@@ -128,5 +139,29 @@ inline Lanes2 subtractInOrder(Lanes2 acc, Lanes2 a, Lanes2 b, bool only_first = 
 }
 
 #endif
+
+/// acc + (a lane k, b lane k) for the lanes k set in `mask`, in lane order: the same bits
+/// as the scalar `if (mask_k) { acc[0] += a_k; acc[1] += b_k; }` (x - (-t) is x + t, and
+/// x - (+0) is x, signed zeros included).
+inline Lanes2 addInOrder(Lanes2 acc, Lanes2 a, Lanes2 b, Lanes2 mask) {
+  const Lanes2 zero = Lanes2::all(0.0);
+  return subtractInOrder(acc, select(mask, -a, zero), select(mask, -b, zero));
+}
+
+/// acc + (a lane k, b lane k) for k = 0, 1 (lane 0 only with `only_first`), in lane
+/// order: the same bits as acc[0] += a_k; acc[1] += b_k.
+inline Lanes2 addInOrder(Lanes2 acc, Lanes2 a, Lanes2 b, bool only_first = false) {
+  return subtractInOrder(acc, -a, -b, only_first);
+}
+
+/// Calls f(j0, j1, valid) for the indices [lo, hi) two at a time: (j, j + 1) with both
+/// lanes valid, and for an odd count a last (j, j) with lane 0 only.
+template <class F>
+inline void forEachTwo(std::uint32_t lo, std::uint32_t hi, F&& f) {
+  for (std::uint32_t j = lo; j < hi; j += 2) {
+    const bool both = j + 1 < hi;
+    f(j, both ? j + 1 : j, Lanes2::valid(both));
+  }
+}
 
 }  // namespace wake
