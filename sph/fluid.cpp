@@ -114,30 +114,78 @@ void Fluid::updateNeighbors() {
   buildNeighborList(grid_, state_.position, kernel_.supportRadius(), neighbors_);
 }
 
+namespace {
+
+/// Particles per call of a pair loop's range function.
+constexpr std::int64_t kBlock = 64;
+
+/// Calls group.template operator()<L>(j, used) for the neighbours [k, e) of a list, L::kWidth
+/// at a time, then the rest (fewer than L::kWidth) two at a time with Lanes2: j holds the
+/// indices (unused lanes repeat the first), `used` how many are real.
+template <class L, class G>
+inline void forEachNeighborGroup(const std::uint32_t* nb, std::uint64_t k, std::uint64_t e,
+                                 G&& group) {
+  for (; k + L::kWidth <= e; k += L::kWidth)
+    group(L::all(0.0), nb + k, L::kWidth);
+  for (; k < e; k += 2) {
+    const bool both = k + 1 < e;
+    const std::uint32_t j[2] = {nb[k], nb[both ? k + 1 : k]};
+    group(Lanes2::all(0.0), j, both ? 2 : 1);
+  }
+}
+
+/// Summation density of particles [i0, i1), several neighbours at a time (the kernel
+/// without branches), added in list order: the same bits as one at a time.
+template <class L>
+inline void densityRange(std::int64_t i0, std::int64_t i1, const Vec3* x,
+                         const NeighborList& neighbors, const CubicSplineKernel& kernel,
+                         double mass, double self, double* density) {
+  const std::uint32_t* nb = neighbors.index.data();
+  const std::uint64_t* offset = neighbors.offset.data();
+  for (std::int64_t i = i0; i < i1; ++i) {
+    Lanes2 sum = Lanes2::all(0.0);  // lane 0: the sum (lane 1 the same)
+    forEachNeighborGroup<L>(
+        nb, offset[i], offset[i + 1], [&](auto lanes, const std::uint32_t* j, int used) {
+          using M = decltype(lanes);
+          const double* p[M::kWidth];
+          for (int t = 0; t < M::kWidth; ++t)
+            p[t] = x[j[t]].data();
+          M xj, yj, zj;
+          gather3Lanes(p, xj, yj, zj);
+          const M dx = M::all(x[i].x()) - xj, dy = M::all(x[i].y()) - yj,
+                  dz = M::all(x[i].z()) - zj;
+          const M w = kernel.value(sqrt(dx * dx + dy * dy + dz * dz));
+          sum = subtractInOrder(sum, -w, -w, used);  // sum - (-w) is sum + w, bit for bit
+        });
+    density[i] = self + mass * sum.lane0();
+  }
+}
+
+void densityRange2(std::int64_t i0, std::int64_t i1, const Vec3* x, const NeighborList& neighbors,
+                   const CubicSplineKernel& kernel, double mass, double self, double* density) {
+  densityRange<Lanes2>(i0, i1, x, neighbors, kernel, mass, self, density);
+}
+#if defined(WAKE_HAS_LANES4)
+WAKE_TARGET_AVX void densityRange4(std::int64_t i0, std::int64_t i1, const Vec3* x,
+                                   const NeighborList& neighbors, const CubicSplineKernel& kernel,
+                                   double mass, double self, double* density) {
+  densityRange<Lanes4>(i0, i1, x, neighbors, kernel, mass, self, density);
+}
+#endif
+
+}  // namespace
+
 void Fluid::computeFluidDensity() {
   const std::int64_t n = static_cast<std::int64_t>(state_.size());
-  const Vec3* x = state_.position.data();
-  const std::uint32_t* nb = neighbors_.index.data();
-  const std::uint64_t* offset = neighbors_.offset.data();
   const double self = mass_ * kernel_.value(0.0);
+  auto range = densityRange2;
+#if defined(WAKE_HAS_LANES4)
+  if (wide_lanes_) range = densityRange4;
+#endif
 #pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < n; ++i) {
-    // Two neighbours at a time (the kernel without branches), added in list order.
-    const Lanes2 xi = Lanes2::all(x[i].x()), yi = Lanes2::all(x[i].y()), zi = Lanes2::all(x[i].z());
-    double sum = 0.0;
-    const std::uint64_t e = offset[i + 1];
-    for (std::uint64_t k = offset[i]; k < e; k += 2) {
-      const bool both = k + 1 < e;
-      const std::uint32_t j0 = nb[k], j1 = both ? nb[k + 1] : j0;
-      Lanes2 xj, yj, zj;
-      Lanes2::gather3(x[j0].data(), x[j1].data(), xj, yj, zj);
-      const Lanes2 dx = xi - xj, dy = yi - yj, dz = zi - zj;
-      const Lanes2 w = kernel_.value(sqrt(dx * dx + dy * dy + dz * dz));
-      sum += w.lane0();
-      if (both) sum += w.lane1();
-    }
-    state_.density[i] = self + mass_ * sum;
-  }
+  for (std::int64_t b = 0; b < n; b += kBlock)
+    range(b, std::min(n, b + kBlock), state_.position.data(), neighbors_, kernel_, mass_, self,
+          state_.density.data());
 }
 
 void Fluid::computePressure() {
@@ -156,68 +204,93 @@ void Fluid::computePressure() {
 
 namespace {
 
-/// The pair loop of Fluid::computeAccelerations. kUniformNu: every particle has the same
-/// kinematic viscosity nu0 (one fluid: the usual case), so Morris's coefficient is
-/// nu0 (1 / rho_a + 1 / rho_b) and the per-neighbour viscosity is not read.
+/// What the pair loop of Fluid::computeAccelerations reads and writes.
+struct AccelerationInputs {
+  const Vec3 *x, *v;
+  const double *rho, *inv_rho, *nu, *pr2;
+  const NeighborList* neighbors;
+  const CubicSplineKernel* kernel;
+  double eps_sq, visc, m;
+  Vec3 gravity;
+  const Vec3* add;  ///< (n) or null
+  Vec3* out;
+};
+
+/// The pair loop of Fluid::computeAccelerations for particles [i0, i1). kUniformNu: every
+/// particle has the same kinematic viscosity nu0 (one fluid: the usual case), so Morris's
+/// coefficient is nu0 (1 / rho_a + 1 / rho_b) and the per-neighbour viscosity is not read.
 ///
-/// Two neighbours at a time: the kernel and the artificial viscosity's branch become masks,
-/// and each lane's terms are added to the sums in list order, so the result is the same
-/// as one neighbour at a time, bit for bit:
+/// Several neighbours at a time: the kernel and the artificial viscosity's branch become
+/// masks, and each lane's terms are added to the sums in list order, so the result is the
+/// same as one neighbour at a time, bit for bit:
 ///   acc -= m (P_a / rho_a^2 + P_b / rho_b^2 + Pi_ab) W'(r) / r x_ab,
 ///   Pi_ab = -visc / (rho_a + rho_b) (v_ab . x_ab) / (r^2 + eps^2) where v_ab . x_ab < 0,
 ///   lap += mu_ab W'(r) / r v_ab.
-template <bool kUniformNu>
-void accelerationLoop(std::int64_t n, const Vec3* x, const Vec3* v, const double* rho,
-                      const double* inv_rho, const double* nu, const double* pr2,
-                      const NeighborList& neighbors, const CubicSplineKernel& kernel, double eps_sq,
-                      double visc, double m, const Vec3& gravity, const Vec3* add, Vec3* out) {
-  const std::uint32_t* nb = neighbors.index.data();
-  const std::uint64_t* offset = neighbors.offset.data();
-  const double nu0 = n > 0 ? nu[0] : 0.0;
-  const Lanes2 mass = Lanes2::all(m), zero = Lanes2::all(0.0);
-  const Lanes2 minus_visc = Lanes2::all(-visc), eps = Lanes2::all(eps_sq);
-#pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < n; ++i) {
-    const Lanes2 xi = Lanes2::all(x[i].x()), yi = Lanes2::all(x[i].y()), zi = Lanes2::all(x[i].z());
-    const Lanes2 ui = Lanes2::all(v[i].x()), vi = Lanes2::all(v[i].y()), wi = Lanes2::all(v[i].z());
-    const Lanes2 rho_i = Lanes2::all(rho[i]), inv_rho_i = Lanes2::all(inv_rho[i]);
-    const Lanes2 nu_i = Lanes2::all(kUniformNu ? nu0 : nu[i]), pi_term = Lanes2::all(pr2[i]);
+template <class L, bool kUniformNu>
+inline void accelerationRange(std::int64_t i0, std::int64_t i1, const AccelerationInputs& in) {
+  const std::uint32_t* nb = in.neighbors->index.data();
+  const std::uint64_t* offset = in.neighbors->offset.data();
+  const CubicSplineKernel& kernel = *in.kernel;
+  const Vec3 *x = in.x, *v = in.v;
+  for (std::int64_t i = i0; i < i1; ++i) {
     // (acc.x, acc.y), (acc.z, lap.x), (lap.y, lap.z)
-    Lanes2 acc_xy = zero, acc_z_lap_x = zero, lap_yz = zero;
-    const std::uint64_t e = offset[i + 1];
-    for (std::uint64_t k = offset[i]; k < e; k += 2) {
-      const bool both = k + 1 < e;
-      const std::uint32_t j0 = nb[k], j1 = both ? nb[k + 1] : j0;
-      Lanes2 xj, yj, zj, uj, vj, wj;
-      Lanes2::gather3(x[j0].data(), x[j1].data(), xj, yj, zj);
-      Lanes2::gather3(v[j0].data(), v[j1].data(), uj, vj, wj);
-      const Lanes2 dx = xi - xj, dy = yi - yj, dz = zi - zj;
-      const Lanes2 du = ui - uj, dv = vi - vj, dw = wi - wj;
-      const Lanes2 r_sq = dx * dx + dy * dy + dz * dz;
-      const Lanes2 dwr = kernel.derivativeOverR(sqrt(r_sq));
-      Lanes2 coeff = pi_term + Lanes2::gather(pr2, j0, j1);
-      const Lanes2 vx = du * dx + dv * dy + dw * dz;
-      coeff = select(vx < zero,
-                     coeff + minus_visc / (rho_i + Lanes2::gather(rho, j0, j1)) * vx / (r_sq + eps),
+    Lanes2 acc_xy = Lanes2::all(0.0), acc_z_lap_x = acc_xy, lap_yz = acc_xy;
+    forEachNeighborGroup<L>(
+        nb, offset[i], offset[i + 1], [&](auto lanes, const std::uint32_t* j, int used) {
+          using M = decltype(lanes);
+          const M zero = M::all(0.0);
+          const double *px[M::kWidth], *pv[M::kWidth];
+          for (int t = 0; t < M::kWidth; ++t) {
+            px[t] = x[j[t]].data();
+            pv[t] = v[j[t]].data();
+          }
+          M xj, yj, zj, uj, vj, wj;
+          gather3Lanes(px, xj, yj, zj);
+          gather3Lanes(pv, uj, vj, wj);
+          const M dx = M::all(x[i].x()) - xj, dy = M::all(x[i].y()) - yj,
+                  dz = M::all(x[i].z()) - zj;
+          const M du = M::all(v[i].x()) - uj, dv = M::all(v[i].y()) - vj,
+                  dw = M::all(v[i].z()) - wj;
+          const M r_sq = dx * dx + dy * dy + dz * dz;
+          const M dwr = kernel.derivativeOverR(sqrt(r_sq));
+          M coeff = M::all(in.pr2[i]) + gatherLanes(zero, in.pr2, j);
+          const M vx = du * dx + dv * dy + dw * dz;
+          coeff =
+              select(vx < zero,
+                     coeff + M::all(-in.visc) / (M::all(in.rho[i]) + gatherLanes(zero, in.rho, j)) *
+                                 vx / (r_sq + M::all(in.eps_sq)),
                      coeff);
-      const Lanes2 f = mass * coeff * dwr;
-      // Morris: x . grad W / |x|^2 = dW/dr / r (< 0), so v_a is drawn towards v_b.
-      const Lanes2 inv_rho_j = Lanes2::gather(inv_rho, j0, j1);
-      const Lanes2 mu = kUniformNu ? nu_i * (inv_rho_j + inv_rho_i)
-                                   : nu_i * inv_rho_j + Lanes2::gather(nu, j0, j1) * inv_rho_i;
-      const Lanes2 g = mu * dwr;
-      // lap += g v_ab, written as lap -= -(g v_ab) (the same bits).
-      acc_xy = subtractInOrder(acc_xy, f * dx, f * dy, !both);
-      acc_z_lap_x = subtractInOrder(acc_z_lap_x, f * dz, -(g * du), !both);
-      lap_yz = subtractInOrder(lap_yz, -(g * dv), -(g * dw), !both);
-    }
+          const M f = M::all(in.m) * coeff * dwr;
+          // Morris: x . grad W / |x|^2 = dW/dr / r (< 0), so v_a is drawn towards v_b.
+          const M inv_rho_j = gatherLanes(zero, in.inv_rho, j);
+          const M mu = kUniformNu ? M::all(in.nu[0]) * (inv_rho_j + M::all(in.inv_rho[i]))
+                                  : M::all(in.nu[i]) * inv_rho_j +
+                                        gatherLanes(zero, in.nu, j) * M::all(in.inv_rho[i]);
+          const M g = mu * dwr;
+          // lap += g v_ab, written as lap -= -(g v_ab) (the same bits).
+          acc_xy = subtractInOrder(acc_xy, f * dx, f * dy, used);
+          acc_z_lap_x = subtractInOrder(acc_z_lap_x, f * dz, -(g * du), used);
+          lap_yz = subtractInOrder(lap_yz, -(g * dv), -(g * dw), used);
+        });
     Vec3 acc(acc_xy.lane0(), acc_xy.lane1(), acc_z_lap_x.lane0());
     const Vec3 lap(acc_z_lap_x.lane1(), lap_yz.lane0(), lap_yz.lane1());
-    acc += m * lap + gravity;
-    if (add) acc += add[i];
-    out[i] = acc;
+    acc += in.m * lap + in.gravity;
+    if (in.add) acc += in.add[i];
+    in.out[i] = acc;
   }
 }
+
+template <bool kUniformNu>
+void accelerationRange2(std::int64_t i0, std::int64_t i1, const AccelerationInputs& in) {
+  accelerationRange<Lanes2, kUniformNu>(i0, i1, in);
+}
+#if defined(WAKE_HAS_LANES4)
+template <bool kUniformNu>
+WAKE_TARGET_AVX void accelerationRange4(std::int64_t i0, std::int64_t i1,
+                                        const AccelerationInputs& in) {
+  accelerationRange<Lanes4, kUniformNu>(i0, i1, in);
+}
+#endif
 
 }  // namespace
 
@@ -228,15 +301,29 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
   for (std::int64_t i = 1; i < n && uniform; ++i)
     uniform = nu[i] == nu[0];
   const double h = kernel_.smoothingLength();
-  const double eps_sq = 0.01 * h * h;
+  AccelerationInputs in;
+  in.x = state_.position.data();
+  in.v = state_.velocity.data();
+  in.rho = state_.density.data();
+  in.inv_rho = inv_rho_.data();
+  in.nu = nu;
+  in.pr2 = p_over_rho_sq_.data();
+  in.neighbors = &neighbors_;
+  in.kernel = &kernel_;
+  in.eps_sq = 0.01 * h * h;
   // nu = 2 alpha H c / (rho_a + rho_b): the numerator is constant.
-  const double visc = 2.0 * params_.viscosity * h * params_.speed_of_sound;
-  const Vec3* add = extra.empty() ? nullptr : extra.data();
-  (uniform ? accelerationLoop<true>
-           : accelerationLoop<false>)(n, state_.position.data(), state_.velocity.data(),
-                                      state_.density.data(), inv_rho_.data(), nu,
-                                      p_over_rho_sq_.data(), neighbors_, kernel_, eps_sq, visc,
-                                      mass_, gravity, add, state_.acceleration.data());
+  in.visc = 2.0 * params_.viscosity * h * params_.speed_of_sound;
+  in.m = mass_;
+  in.gravity = gravity;
+  in.add = extra.empty() ? nullptr : extra.data();
+  in.out = state_.acceleration.data();
+  auto range = uniform ? accelerationRange2<true> : accelerationRange2<false>;
+#if defined(WAKE_HAS_LANES4)
+  if (wide_lanes_) range = uniform ? accelerationRange4<true> : accelerationRange4<false>;
+#endif
+#pragma omp parallel for schedule(static)
+  for (std::int64_t b = 0; b < n; b += kBlock)
+    range(b, std::min(n, b + kBlock), in);
 }
 
 double Fluid::maxSpeed() const {

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <vector>
 
 namespace wake {
@@ -131,6 +132,11 @@ class Fluid {
   double maxKinematicViscosity() const;
   double maxAcceleration() const;
 
+  /// Whether the pair loops take four neighbours at a time (AVX, where the CPU has it:
+  /// the default) or two: the same results, bit for bit.
+  bool wideLanes() const { return wide_lanes_; }
+  void setWideLanes(bool on) { wide_lanes_ = on && hasWideLanes(); }
+
  private:
   FluidParams params_;
   CubicSplineKernel kernel_;
@@ -145,6 +151,7 @@ class Fluid {
   std::vector<std::uint32_t> order_;   ///< (n) scratch: cell-sort permutation
   std::vector<double> p_over_rho_sq_;  ///< (n) P / rho^2 (m^5 / (kg s^2)), this step
   std::vector<double> inv_rho_;        ///< (n) 1 / rho (m^3/kg), this step
+  bool wide_lanes_ = hasWideLanes();
 };
 
 }  // namespace wake

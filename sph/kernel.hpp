@@ -20,7 +20,7 @@ class CubicSplineKernel {
     if (q >= 2.0) return 0.0;
     if (q < 1.0) return sigma_ * (1.0 - 1.5 * q * q + 0.75 * q * q * q);
     const double t = 2.0 - q;
-    return sigma_ * 0.25 * t * t * t;
+    return outer_value_ * t * t * t;
   }
 
   /// dW/dr divided by r (1/m^5), so that grad W(x) = x * derivativeOverR(|x|).
@@ -28,33 +28,32 @@ class CubicSplineKernel {
   double derivativeOverR(double r) const {
     const double q = r * inv_h_;
     if (q >= 2.0) return 0.0;
-    if (q < 1.0) return sigma_ * inv_h_ * inv_h_ * (-3.0 + 2.25 * q);
+    if (q < 1.0) return inner_gradient_ * (-3.0 + 2.25 * q);
     if (r <= 0.0) return 0.0;
     const double t = 2.0 - q;
-    return -sigma_ * 0.75 * t * t * inv_h_ / r;
+    return outer_gradient_ * t * t * inv_h_ / r;
   }
 
-  /// value() of two distances at once: per lane the same operations, so the same bits.
-  Lanes2 value(Lanes2 r) const {
-    const Lanes2 q = r * Lanes2::all(inv_h_);
-    const Lanes2 inner = Lanes2::all(sigma_) * (Lanes2::all(1.0) - Lanes2::all(1.5) * q * q +
-                                                Lanes2::all(0.75) * q * q * q);
-    const Lanes2 t = Lanes2::all(2.0) - q;
-    const Lanes2 outer = Lanes2::all(sigma_) * Lanes2::all(0.25) * t * t * t;
-    return select(q < Lanes2::all(1.0), inner,
-                  select(q >= Lanes2::all(2.0), Lanes2::all(0.0), outer));
+  /// value() of several distances at once (Lanes2, Lanes4): per lane the same operations,
+  /// so the same bits.
+  template <class L>
+  L value(L r) const {
+    const L q = r * L::all(inv_h_);
+    const L inner = L::all(sigma_) * (L::all(1.0) - L::all(1.5) * q * q + L::all(0.75) * q * q * q);
+    const L t = L::all(2.0) - q;
+    const L outer = L::all(outer_value_) * t * t * t;
+    return select(q < L::all(1.0), inner, select(q >= L::all(2.0), L::all(0.0), outer));
   }
 
-  /// derivativeOverR() of two distances at once (the same bits per lane). r = 0 takes the
-  /// inner piece, as in the scalar form.
-  Lanes2 derivativeOverR(Lanes2 r) const {
-    const Lanes2 q = r * Lanes2::all(inv_h_);
-    const Lanes2 inner = Lanes2::all(sigma_) * Lanes2::all(inv_h_) * Lanes2::all(inv_h_) *
-                         (Lanes2::all(-3.0) + Lanes2::all(2.25) * q);
-    const Lanes2 t = Lanes2::all(2.0) - q;
-    const Lanes2 outer = Lanes2::all(-sigma_) * Lanes2::all(0.75) * t * t * Lanes2::all(inv_h_) / r;
-    return select(q < Lanes2::all(1.0), inner,
-                  select(q >= Lanes2::all(2.0), Lanes2::all(0.0), outer));
+  /// derivativeOverR() of several distances at once (the same bits per lane). r = 0 takes
+  /// the inner piece, as in the scalar form.
+  template <class L>
+  L derivativeOverR(L r) const {
+    const L q = r * L::all(inv_h_);
+    const L inner = L::all(inner_gradient_) * (L::all(-3.0) + L::all(2.25) * q);
+    const L t = L::all(2.0) - q;
+    const L outer = L::all(outer_gradient_) * t * t * L::all(inv_h_) / r;
+    return select(q < L::all(1.0), inner, select(q >= L::all(2.0), L::all(0.0), outer));
   }
 
   /// grad_a W(x_a - x_b) for x = x_a - x_b (1/m^4).
@@ -62,6 +61,9 @@ class CubicSplineKernel {
 
  private:
   double h_, inv_h_, sigma_;
+  double outer_value_;     ///< 0.25 sigma
+  double inner_gradient_;  ///< sigma / H^2 (as sigma * (1 / H) * (1 / H))
+  double outer_gradient_;  ///< -0.75 sigma
 };
 
 }  // namespace wake

@@ -1,16 +1,23 @@
-// Two doubles computed side by side (one SSE2 register on x86-64, two scalars elsewhere):
-// what the pair loops use to evaluate two neighbours at once. Every operation is the
-// correctly rounded IEEE operation of each lane, so a lane gives the same bits as the
-// scalar code it mirrors; only branches become masks (select), and a sum over pairs is
-// still added lane by lane in the scalar order by its caller.
+// Doubles computed side by side: what the pair loops use to evaluate several neighbours at
+// once. Lanes2 is one SSE2 register on x86-64 (two scalars elsewhere); Lanes4 one AVX
+// register, used where the CPU has AVX (the functions that use it are compiled for AVX and
+// chosen at run time: hasWideLanes()). Every operation is the correctly rounded IEEE
+// operation of each lane, so a lane gives the same bits as the scalar code it mirrors; only
+// branches become masks (select), and a sum over pairs is still added lane by lane in the
+// scalar order (subtractInOrder). Lanes2 and Lanes4 give the same bits.
 #pragma once
 
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define WAKE_HAS_LANES4 1
 #endif
 
 namespace wake {
@@ -19,16 +26,13 @@ namespace wake {
 
 struct Lanes2 {
   __m128d v;
+  static constexpr int kWidth = 2;
 
   static Lanes2 all(double a) { return {_mm_set1_pd(a)}; }
-  /// (a, b).
-  static Lanes2 of(double a, double b) { return {_mm_set_pd(b, a)}; }
   /// (a[j0], a[j1]).
   static Lanes2 gather(const double* a, std::uint32_t j0, std::uint32_t j1) {
     return {_mm_loadh_pd(_mm_load_sd(a + j0), a + j1)};
   }
-  /// Two consecutive doubles a[0], a[1].
-  static Lanes2 load(const double* a) { return {_mm_loadu_pd(a)}; }
   /// Components of two 3-vectors stored as 3 consecutive doubles at p0 and p1:
   /// x = (p0[0], p1[0]), y = (p0[1], p1[1]), z = (p0[2], p1[2]).
   static void gather3(const double* p0, const double* p1, Lanes2& x, Lanes2& y, Lanes2& z) {
@@ -50,24 +54,17 @@ struct Lanes2 {
   /// Masks: all bits set in a lane where the comparison holds.
   friend Lanes2 operator<(Lanes2 a, Lanes2 b) { return {_mm_cmplt_pd(a.v, b.v)}; }
   friend Lanes2 operator>=(Lanes2 a, Lanes2 b) { return {_mm_cmpge_pd(a.v, b.v)}; }
-  friend Lanes2 operator>(Lanes2 a, Lanes2 b) { return {_mm_cmpgt_pd(a.v, b.v)}; }
-  friend Lanes2 operator&(Lanes2 a, Lanes2 b) { return {_mm_and_pd(a.v, b.v)}; }
-  /// The mask of the lanes in use: both, or lane 0 only.
-  static Lanes2 valid(bool both) { return {_mm_castsi128_pd(_mm_set_epi64x(both ? -1 : 0, -1))}; }
   /// Per lane: `mask` set ? a : b.
   friend Lanes2 select(Lanes2 mask, Lanes2 a, Lanes2 b) {
     return {_mm_or_pd(_mm_and_pd(mask.v, a.v), _mm_andnot_pd(mask.v, b.v))};
   }
-  /// Bit k set where lane k of the mask is set.
-  friend int bits(Lanes2 mask) { return _mm_movemask_pd(mask.v); }
 };
 
 /// acc - (a lane 0, b lane 0) - (a lane 1, b lane 1): per lane of acc the scalar order
-/// acc -= a_0; acc -= a_1 (lane 0 with a, lane 1 with b). With `only_first`, lane 1 of a
-/// and b is left out.
-inline Lanes2 subtractInOrder(Lanes2 acc, Lanes2 a, Lanes2 b, bool only_first = false) {
+/// acc -= a_0; acc -= a_1 (lane 0 with a, lane 1 with b); only the first `used` lanes.
+inline Lanes2 subtractInOrder(Lanes2 acc, Lanes2 a, Lanes2 b, int used) {
   __m128d s = _mm_sub_pd(acc.v, _mm_unpacklo_pd(a.v, b.v));
-  if (!only_first) s = _mm_sub_pd(s, _mm_unpackhi_pd(a.v, b.v));
+  if (used > 1) s = _mm_sub_pd(s, _mm_unpackhi_pd(a.v, b.v));
   return {s};
 }
 
@@ -75,13 +72,12 @@ inline Lanes2 subtractInOrder(Lanes2 acc, Lanes2 a, Lanes2 b, bool only_first = 
 
 struct Lanes2 {
   double v[2];
+  static constexpr int kWidth = 2;
 
   static Lanes2 all(double a) { return {{a, a}}; }
-  static Lanes2 of(double a, double b) { return {{a, b}}; }
   static Lanes2 gather(const double* a, std::uint32_t j0, std::uint32_t j1) {
     return {{a[j0], a[j1]}};
   }
-  static Lanes2 load(const double* a) { return {{a[0], a[1]}}; }
   static void gather3(const double* p0, const double* p1, Lanes2& x, Lanes2& y, Lanes2& z) {
     x = {{p0[0], p1[0]}};
     y = {{p0[1], p1[1]}};
@@ -102,17 +98,9 @@ struct Lanes2 {
   friend Lanes2 operator>=(Lanes2 a, Lanes2 b) {
     return {{mask(a.v[0] >= b.v[0]), mask(a.v[1] >= b.v[1])}};
   }
-  friend Lanes2 operator>(Lanes2 a, Lanes2 b) {
-    return {{mask(a.v[0] > b.v[0]), mask(a.v[1] > b.v[1])}};
-  }
-  friend Lanes2 operator&(Lanes2 a, Lanes2 b) {
-    return {{mask(isSet(a.v[0]) && isSet(b.v[0])), mask(isSet(a.v[1]) && isSet(b.v[1]))}};
-  }
-  static Lanes2 valid(bool both) { return {{mask(true), mask(both)}}; }
   friend Lanes2 select(Lanes2 m, Lanes2 a, Lanes2 b) {
     return {{isSet(m.v[0]) ? a.v[0] : b.v[0], isSet(m.v[1]) ? a.v[1] : b.v[1]}};
   }
-  friend int bits(Lanes2 m) { return (isSet(m.v[0]) ? 1 : 0) | (isSet(m.v[1]) ? 2 : 0); }
 
  private:
   static double mask(bool on) {
@@ -128,10 +116,10 @@ struct Lanes2 {
   }
 };
 
-inline Lanes2 subtractInOrder(Lanes2 acc, Lanes2 a, Lanes2 b, bool only_first = false) {
+inline Lanes2 subtractInOrder(Lanes2 acc, Lanes2 a, Lanes2 b, int used) {
   acc.v[0] -= a.v[0];
   acc.v[1] -= b.v[0];
-  if (!only_first) {
+  if (used > 1) {
     acc.v[0] -= a.v[1];
     acc.v[1] -= b.v[1];
   }
@@ -140,28 +128,85 @@ inline Lanes2 subtractInOrder(Lanes2 acc, Lanes2 a, Lanes2 b, bool only_first = 
 
 #endif
 
-/// acc + (a lane k, b lane k) for the lanes k set in `mask`, in lane order: the same bits
-/// as the scalar `if (mask_k) { acc[0] += a_k; acc[1] += b_k; }` (x - (-t) is x + t, and
-/// x - (+0) is x, signed zeros included).
-inline Lanes2 addInOrder(Lanes2 acc, Lanes2 a, Lanes2 b, Lanes2 mask) {
-  const Lanes2 zero = Lanes2::all(0.0);
-  return subtractInOrder(acc, select(mask, -a, zero), select(mask, -b, zero));
+/// The index-array forms of the gathers, for loops written once for Lanes2 and Lanes4:
+/// (a[j[0]], a[j[1]]) and the 3-vectors at p[0], p[1].
+inline Lanes2 gatherLanes(Lanes2, const double* a, const std::uint32_t* j) {
+  return Lanes2::gather(a, j[0], j[1]);
+}
+inline void gather3Lanes(const double* const* p, Lanes2& x, Lanes2& y, Lanes2& z) {
+  Lanes2::gather3(p[0], p[1], x, y, z);
 }
 
-/// acc + (a lane k, b lane k) for k = 0, 1 (lane 0 only with `only_first`), in lane
-/// order: the same bits as acc[0] += a_k; acc[1] += b_k.
-inline Lanes2 addInOrder(Lanes2 acc, Lanes2 a, Lanes2 b, bool only_first = false) {
-  return subtractInOrder(acc, -a, -b, only_first);
-}
+#if defined(WAKE_HAS_LANES4)
 
-/// Calls f(j0, j1, valid) for the indices [lo, hi) two at a time: (j, j + 1) with both
-/// lanes valid, and for an odd count a last (j, j) with lane 0 only.
-template <class F>
-inline void forEachTwo(std::uint32_t lo, std::uint32_t hi, F&& f) {
-  for (std::uint32_t j = lo; j < hi; j += 2) {
-    const bool both = j + 1 < hi;
-    f(j, both ? j + 1 : j, Lanes2::valid(both));
+/// Lanes4's operations: AVX code, inlined into the functions marked WAKE_TARGET_AVX.
+#define WAKE_LANES4_FN __attribute__((target("avx"))) inline
+/// A function that uses Lanes4: compiled for AVX with everything it calls inlined
+/// (flatten); called only where hasWideLanes().
+#define WAKE_TARGET_AVX __attribute__((target("avx"), flatten))
+
+struct Lanes4 {
+  __m256d v;
+  static constexpr int kWidth = 4;
+
+  WAKE_LANES4_FN static Lanes4 all(double a) { return {_mm256_set1_pd(a)}; }
+
+  WAKE_LANES4_FN friend Lanes4 operator+(Lanes4 a, Lanes4 b) { return {_mm256_add_pd(a.v, b.v)}; }
+  WAKE_LANES4_FN friend Lanes4 operator-(Lanes4 a, Lanes4 b) { return {_mm256_sub_pd(a.v, b.v)}; }
+  WAKE_LANES4_FN friend Lanes4 operator*(Lanes4 a, Lanes4 b) { return {_mm256_mul_pd(a.v, b.v)}; }
+  WAKE_LANES4_FN friend Lanes4 operator/(Lanes4 a, Lanes4 b) { return {_mm256_div_pd(a.v, b.v)}; }
+  WAKE_LANES4_FN friend Lanes4 operator-(Lanes4 a) {
+    return {_mm256_xor_pd(a.v, _mm256_set1_pd(-0.0))};
   }
+  WAKE_LANES4_FN friend Lanes4 sqrt(Lanes4 a) { return {_mm256_sqrt_pd(a.v)}; }
+  WAKE_LANES4_FN friend Lanes4 operator<(Lanes4 a, Lanes4 b) {
+    return {_mm256_cmp_pd(a.v, b.v, _CMP_LT_OQ)};
+  }
+  WAKE_LANES4_FN friend Lanes4 operator>=(Lanes4 a, Lanes4 b) {
+    return {_mm256_cmp_pd(a.v, b.v, _CMP_GE_OQ)};
+  }
+  WAKE_LANES4_FN friend Lanes4 select(Lanes4 mask, Lanes4 a, Lanes4 b) {
+    return {_mm256_blendv_pd(b.v, a.v, mask.v)};
+  }
+};
+
+WAKE_LANES4_FN Lanes4 gatherLanes(Lanes4, const double* a, const std::uint32_t* j) {
+  return {_mm256_set_m128d(_mm_loadh_pd(_mm_load_sd(a + j[2]), a + j[3]),
+                           _mm_loadh_pd(_mm_load_sd(a + j[0]), a + j[1]))};
 }
+WAKE_LANES4_FN void gather3Lanes(const double* const* p, Lanes4& x, Lanes4& y, Lanes4& z) {
+  const __m128d a = _mm_loadu_pd(p[0]), b = _mm_loadu_pd(p[1]);
+  const __m128d c = _mm_loadu_pd(p[2]), d = _mm_loadu_pd(p[3]);
+  x.v = _mm256_set_m128d(_mm_unpacklo_pd(c, d), _mm_unpacklo_pd(a, b));
+  y.v = _mm256_set_m128d(_mm_unpackhi_pd(c, d), _mm_unpackhi_pd(a, b));
+  z.v = _mm256_set_m128d(_mm_loadh_pd(_mm_load_sd(p[2] + 2), p[3] + 2),
+                         _mm_loadh_pd(_mm_load_sd(p[0] + 2), p[1] + 2));
+}
+
+/// acc - (a lane k, b lane k) for k = 0 .. 3, in that order (as for Lanes2; all four lanes).
+WAKE_LANES4_FN Lanes2 subtractInOrder(Lanes2 acc, Lanes4 a, Lanes4 b, int) {
+  const __m128d a_lo = _mm256_castpd256_pd128(a.v), a_hi = _mm256_extractf128_pd(a.v, 1);
+  const __m128d b_lo = _mm256_castpd256_pd128(b.v), b_hi = _mm256_extractf128_pd(b.v, 1);
+  __m128d s = _mm_sub_pd(acc.v, _mm_unpacklo_pd(a_lo, b_lo));
+  s = _mm_sub_pd(s, _mm_unpackhi_pd(a_lo, b_lo));
+  s = _mm_sub_pd(s, _mm_unpacklo_pd(a_hi, b_hi));
+  s = _mm_sub_pd(s, _mm_unpackhi_pd(a_hi, b_hi));
+  return {s};
+}
+
+/// Whether this CPU (and its operating system) runs AVX code, and the environment does not
+/// ask for two lanes (WAKE_NO_AVX set: to compare; the results are the same bits).
+inline bool hasWideLanes() {
+  static const bool avx = __builtin_cpu_supports("avx") && !std::getenv("WAKE_NO_AVX");
+  return avx;
+}
+
+#else
+
+inline bool hasWideLanes() {
+  return false;
+}
+
+#endif
 
 }  // namespace wake
