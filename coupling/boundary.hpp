@@ -82,6 +82,15 @@ struct WallPairs {
   /// sample k are particle[set][offset[set][k] .. offset[set][k + 1]).
   std::vector<std::vector<std::uint32_t>> offset, particle;
   std::size_t particles = 0;  ///< n when found
+
+  /// Calls f(set, samples, count) for each segment of particle i, in order (c: its chunk,
+  /// first: the chunk's first particle).
+  template <class F>
+  void forEachSegment(std::size_t i, std::size_t c, std::size_t first, F&& f) const {
+    const std::uint32_t* record = chunk[c].data();
+    for (std::size_t pos = i == first ? 0 : end[i - 1]; pos < end[i]; pos += 2 + record[pos + 1])
+      f(record[pos], record + pos + 2, record[pos + 1]);
+  }
 };
 
 /// Contact of one fluid particle with one body: its centre is closer than the fluid

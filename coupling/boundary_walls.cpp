@@ -194,34 +194,31 @@ void Boundaries::addWallPressure(const Fluid& fluid, const BodyPlacement& at,
 #pragma omp parallel for schedule(static)
   for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
     const std::size_t end = std::min(n, (c + 1) * kChunk);
-    const std::uint32_t* record = pairs.chunk[c].data();
-    std::size_t pos = 0;
     for (std::size_t i = c * kChunk; i < end; ++i) {
       const Vec3 xi = st.position[i];
       const double pr2 = st.pressure[i] / (st.density[i] * st.density[i]);
       Vec3 a = Vec3::Zero();
       // The segments of addWallTerms: the static set first, then the moving bodies.
-      for (; pos < pairs.end[i]; pos += 2 + record[pos + 1]) {
-        const std::uint32_t set = record[pos], count = record[pos + 1];
-        const std::uint32_t* near = record + pos + 2;
-        if (set == 0) {
-          a -= pressureSum(static_, p_rho2[0], xi, pr2, near, count, nullptr);
-          continue;
-        }
-        const MovingBody& m = moving_[set - 1];
-        const BodyFrame& f = at[m.body];
-        const Vec3 p = f.rotation.transpose() * (xi - f.pose.position);
-        const bool react = bodies_[m.body].settings.twoWay();
-        Vec3 moment = Vec3::Zero();
-        const Vec3 sum = f.rotation * pressureSum(m.samples, p_rho2[set], p, pr2, near, count,
-                                                  react ? &moment : nullptr);
-        a -= sum;
-        if (react) {
-          Wrench& w = chunk_reaction_[c * nb + m.body];
-          w.force += (mass * rho0) * sum;
-          w.torque += (mass * rho0) * (f.rotation * moment);
-        }
-      }
+      pairs.forEachSegment(
+          i, c, c * kChunk, [&](std::uint32_t set, const std::uint32_t* near, std::uint32_t count) {
+            if (set == 0) {
+              a -= pressureSum(static_, p_rho2[0], xi, pr2, near, count, nullptr);
+              return;
+            }
+            const MovingBody& m = moving_[set - 1];
+            const BodyFrame& f = at[m.body];
+            const Vec3 p = f.rotation.transpose() * (xi - f.pose.position);
+            const bool react = bodies_[m.body].settings.twoWay();
+            Vec3 moment = Vec3::Zero();
+            const Vec3 sum = f.rotation * pressureSum(m.samples, p_rho2[set], p, pr2, near, count,
+                                                      react ? &moment : nullptr);
+            a -= sum;
+            if (react) {
+              Wrench& w = chunk_reaction_[c * nb + m.body];
+              w.force += (mass * rho0) * sum;
+              w.torque += (mass * rho0) * (f.rotation * moment);
+            }
+          });
       extra[i] += rho0 * a;
     }
   }
@@ -242,14 +239,12 @@ void Boundaries::transposePairs(WallPairs& pairs) const {
     pairs.offset[s].assign((s == 0 ? static_ : moving_[s - 1].samples).position.size() + 1, 0u);
   // Visits every pair in particle order.
   auto for_each_pair = [&](auto&& f) {
-    for (std::size_t c = 0; c * kChunk < n; ++c) {
-      const std::uint32_t* record = pairs.chunk[c].data();
-      std::size_t pos = 0;
-      for (std::size_t i = c * kChunk, end = std::min(n, (c + 1) * kChunk); i < end; ++i)
-        for (; pos < pairs.end[i]; pos += 2 + record[pos + 1])
-          for (std::uint32_t t = 0; t < record[pos + 1]; ++t)
-            f(record[pos], record[pos + 2 + t], static_cast<std::uint32_t>(i));
-    }
+    for (std::size_t i = 0; i < n; ++i)
+      pairs.forEachSegment(i, i / kChunk, i / kChunk * kChunk,
+                           [&](std::uint32_t set, const std::uint32_t* near, std::uint32_t count) {
+                             for (std::uint32_t t = 0; t < count; ++t)
+                               f(set, near[t], static_cast<std::uint32_t>(i));
+                           });
   };
   for_each_pair([&](std::uint32_t s, std::uint32_t k, std::uint32_t) { ++pairs.offset[s][k + 1]; });
   for (std::size_t s = 0; s < sets; ++s) {

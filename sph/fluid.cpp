@@ -119,9 +119,9 @@ namespace {
 /// Particles per call of a pair loop's range function.
 constexpr std::int64_t kBlock = 64;
 
-/// Calls group.template operator()<L>(j, used) for the neighbours [k, e) of a list, L::kWidth
-/// at a time, then the rest (fewer than L::kWidth) two at a time with Lanes2: j holds the
-/// indices (unused lanes repeat the first), `used` how many are real.
+/// Calls group(lanes, j, used) for the neighbours [k, e) of a list: L::kWidth at a time
+/// (lanes: an L), then the rest (fewer than L::kWidth) two at a time (lanes: a Lanes2). j
+/// holds the indices (an unused lane repeats the first), `used` how many are real.
 template <class L, class G>
 inline void forEachNeighborGroup(const std::uint32_t* nb, std::uint64_t k, std::uint64_t e,
                                  G&& group) {
