@@ -116,9 +116,6 @@ void Fluid::updateNeighbors() {
 
 namespace {
 
-/// Particles per call of a pair loop's range function.
-constexpr std::int64_t kBlock = 64;
-
 /// Calls group(lanes, j, used) for the neighbours [k, e) of a list: L::kWidth at a time
 /// (lanes: an L), then the rest (fewer than L::kWidth) two at a time (lanes: a Lanes2). j
 /// holds the indices (an unused lane repeats the first), `used` how many are real.
@@ -134,31 +131,70 @@ inline void forEachNeighborGroup(const std::uint32_t* nb, std::uint64_t k, std::
   }
 }
 
-/// Summation density of particles [i0, i1), several neighbours at a time (the kernel
-/// without branches), added in list order: the same bits as one at a time.
+/// Where the later neighbours (j > i) of point i start in its list, and where its
+/// neighbours at or after `first` start (the earlier ones ascend: a short scan, only for
+/// the points whose list reaches before `first`).
+inline std::uint64_t laterStart(const NeighborList& list, std::size_t i) {
+  return list.offset[i] + list.lower_count[i];
+}
+inline std::uint64_t firstAtOrAfter(const NeighborList& list, std::size_t i, std::uint32_t first) {
+  std::uint64_t k = list.offset[i];
+  const std::uint64_t later = laterStart(list, i);
+  while (k < later && list.index[k] < first)
+    ++k;
+  return k;
+}
+
+/// Runs f(i0, i1) on each thread for its share [n t / T, n (t + 1) / T) of the points:
+/// the ranges of the symmetric pair loops below.
+template <class F>
+void forEachThreadRange(std::int64_t n, F&& f) {
+#pragma omp parallel
+  {
+    const std::int64_t t = omp_get_thread_num(), nt = omp_get_num_threads();
+    f(n * t / nt, n * (t + 1) / nt);
+  }
+}
+
+/// Summation density of the particles [i0, i1) (one thread's range), several neighbours
+/// at a time (the kernel without branches). Each pair's kernel value is computed once,
+/// from its lower index, and added to both particles' sums; a pair with a particle before
+/// i0 is computed from inside the range. Each particle's terms are still added in its
+/// list's order (the earlier neighbours before i0, then those in the range as the loop
+/// reaches them, then its later ones), so the sums are the bits of one neighbour at a
+/// time over the whole list, on any number of threads. `density` holds the partial sums.
 template <class L>
 inline void densityRange(std::int64_t i0, std::int64_t i1, const Vec3* x,
                          const NeighborList& neighbors, const CubicSplineKernel& kernel,
                          double mass, double self, double* density) {
   const std::uint32_t* nb = neighbors.index.data();
-  const std::uint64_t* offset = neighbors.offset.data();
-  for (std::int64_t i = i0; i < i1; ++i) {
-    Lanes2 sum = Lanes2::all(0.0);  // lane 0: the sum (lane 1 the same)
-    forEachNeighborGroup<L>(
-        nb, offset[i], offset[i + 1], [&](auto lanes, const std::uint32_t* j, int used) {
-          using M = decltype(lanes);
-          const double* p[M::kWidth];
-          for (int t = 0; t < M::kWidth; ++t)
-            p[t] = x[j[t]].data();
-          M xj, yj, zj;
-          gather3Lanes(p, xj, yj, zj);
-          const M dx = M::all(x[i].x()) - xj, dy = M::all(x[i].y()) - yj,
-                  dz = M::all(x[i].z()) - zj;
-          const M w = kernel.value(sqrt(dx * dx + dy * dy + dz * dz));
-          sum = subtractInOrder(sum, -w, -w, used);  // sum - (-w) is sum + w, bit for bit
-        });
-    density[i] = self + mass * sum.lane0();
-  }
+  const std::uint32_t end = static_cast<std::uint32_t>(i1);
+  auto sums = [&](std::int64_t i, std::uint64_t k, std::uint64_t e, double start, bool both) {
+    Lanes2 sum = Lanes2::all(start);  // lane 0: the sum (lane 1 the same)
+    forEachNeighborGroup<L>(nb, k, e, [&](auto lanes, const std::uint32_t* j, int used) {
+      using M = decltype(lanes);
+      const double* p[M::kWidth];
+      for (int t = 0; t < M::kWidth; ++t)
+        p[t] = x[j[t]].data();
+      M xj, yj, zj;
+      gather3Lanes(p, xj, yj, zj);
+      const M dx = M::all(x[i].x()) - xj, dy = M::all(x[i].y()) - yj, dz = M::all(x[i].z()) - zj;
+      const M w = kernel.value(sqrt(dx * dx + dy * dy + dz * dz));
+      sum = subtractInOrder(sum, -w, -w, used);  // sum - (-w) is sum + w, bit for bit
+      if (!both) return;
+      double* other[M::kWidth];
+      for (int t = 0; t < M::kWidth; ++t)
+        other[t] = j[t] < end ? density + j[t] : nullptr;
+      addToOne(other, w, used);
+    });
+    return sum.lane0();
+  };
+  for (std::int64_t i = i0; i < i1; ++i)
+    density[i] = sums(i, neighbors.offset[i],
+                      firstAtOrAfter(neighbors, i, static_cast<std::uint32_t>(i0)), 0.0, false);
+  for (std::int64_t i = i0; i < i1; ++i)
+    density[i] =
+        self + mass * sums(i, laterStart(neighbors, i), neighbors.offset[i + 1], density[i], true);
 }
 
 void densityRange2(std::int64_t i0, std::int64_t i1, const Vec3* x, const NeighborList& neighbors,
@@ -182,10 +218,9 @@ void Fluid::computeFluidDensity() {
 #if defined(WAKE_HAS_LANES4)
   if (wide_lanes_) range = densityRange4;
 #endif
-#pragma omp parallel for schedule(static)
-  for (std::int64_t b = 0; b < n; b += kBlock)
-    range(b, std::min(n, b + kBlock), state_.position.data(), neighbors_, kernel_, mass_, self,
-          state_.density.data());
+  forEachThreadRange(n, [&](std::int64_t i0, std::int64_t i1) {
+    range(i0, i1, state_.position.data(), neighbors_, kernel_, mass_, self, state_.density.data());
+  });
 }
 
 void Fluid::computePressure() {
@@ -214,70 +249,105 @@ struct AccelerationInputs {
   Vec3 gravity;
   const Vec3* add;  ///< (n) or null
   Vec3* out;
+  double* sums;  ///< (6 n) scratch: partial sums
 };
 
-/// The pair loop of Fluid::computeAccelerations for particles [i0, i1). kUniformNu: every
-/// particle has the same kinematic viscosity nu0 (one fluid: the usual case), so Morris's
-/// coefficient is nu0 (1 / rho_a + 1 / rho_b) and the per-neighbour viscosity is not read.
+/// The pair loop of Fluid::computeAccelerations for the particles [i0, i1) (one thread's
+/// range). kUniformNu: every particle has the same kinematic viscosity nu0 (one fluid: the
+/// usual case), so Morris's coefficient is nu0 (1 / rho_a + 1 / rho_b) and the
+/// per-neighbour viscosity is not read.
 ///
 /// Several neighbours at a time: the kernel and the artificial viscosity's branch become
-/// masks, and each lane's terms are added to the sums in list order, so the result is the
-/// same as one neighbour at a time, bit for bit:
+/// masks. Each pair is computed once, from its lower index, and its terms go to both
+/// particles (negated for the other: every term is odd in x_ab and v_ab, and its factors
+/// are symmetric sums, the same bits from either side), as in densityRange: each
+/// particle's terms are added in its list's order, so the result is the bits of one
+/// neighbour at a time over the whole list, on any number of threads:
 ///   acc -= m (P_a / rho_a^2 + P_b / rho_b^2 + Pi_ab) W'(r) / r x_ab,
 ///   Pi_ab = -visc / (rho_a + rho_b) (v_ab . x_ab) / (r^2 + eps^2) where v_ab . x_ab < 0,
 ///   lap += mu_ab W'(r) / r v_ab.
+/// `sums` (6 per particle: acc, lap) holds the partial sums.
 template <class L, bool kUniformNu>
 inline void accelerationRange(std::int64_t i0, std::int64_t i1, const AccelerationInputs& in) {
-  const std::uint32_t* nb = in.neighbors->index.data();
-  const std::uint64_t* offset = in.neighbors->offset.data();
+  const NeighborList& list = *in.neighbors;
+  const std::uint32_t* nb = list.index.data();
   const CubicSplineKernel& kernel = *in.kernel;
   const Vec3 *x = in.x, *v = in.v;
-  for (std::int64_t i = i0; i < i1; ++i) {
-    // (acc.x, acc.y), (acc.z, lap.x), (lap.y, lap.z)
-    Lanes2 acc_xy = Lanes2::all(0.0), acc_z_lap_x = acc_xy, lap_yz = acc_xy;
-    forEachNeighborGroup<L>(
-        nb, offset[i], offset[i + 1], [&](auto lanes, const std::uint32_t* j, int used) {
-          using M = decltype(lanes);
-          const M zero = M::all(0.0);
-          const double *px[M::kWidth], *pv[M::kWidth];
-          for (int t = 0; t < M::kWidth; ++t) {
-            px[t] = x[j[t]].data();
-            pv[t] = v[j[t]].data();
-          }
-          M xj, yj, zj, uj, vj, wj;
-          gather3Lanes(px, xj, yj, zj);
-          gather3Lanes(pv, uj, vj, wj);
-          const M dx = M::all(x[i].x()) - xj, dy = M::all(x[i].y()) - yj,
-                  dz = M::all(x[i].z()) - zj;
-          const M du = M::all(v[i].x()) - uj, dv = M::all(v[i].y()) - vj,
-                  dw = M::all(v[i].z()) - wj;
-          const M r_sq = dx * dx + dy * dy + dz * dz;
-          const M dwr = kernel.derivativeOverR(sqrt(r_sq));
-          M coeff = M::all(in.pr2[i]) + gatherLanes(zero, in.pr2, j);
-          const M vx = du * dx + dv * dy + dw * dz;
-          coeff =
-              select(vx < zero,
+  double* sums = in.sums;
+  const std::uint32_t end = static_cast<std::uint32_t>(i1);
+  // (acc.x, acc.y), (acc.z, lap.x), (lap.y, lap.z)
+  auto add = [&](std::int64_t i, std::uint64_t k, std::uint64_t e, bool both) {
+    double* own = sums + 6 * i;
+    Lanes2 acc_xy{}, acc_z_lap_x{}, lap_yz{};
+    if (both) {
+      acc_xy = Lanes2::load(own);
+      acc_z_lap_x = Lanes2::load(own + 2);
+      lap_yz = Lanes2::load(own + 4);
+    } else {
+      acc_xy = acc_z_lap_x = lap_yz = Lanes2::all(0.0);
+    }
+    forEachNeighborGroup<L>(nb, k, e, [&](auto lanes, const std::uint32_t* j, int used) {
+      using M = decltype(lanes);
+      const M zero = M::all(0.0);
+      const double *px[M::kWidth], *pv[M::kWidth];
+      for (int t = 0; t < M::kWidth; ++t) {
+        px[t] = x[j[t]].data();
+        pv[t] = v[j[t]].data();
+      }
+      M xj, yj, zj, uj, vj, wj;
+      gather3Lanes(px, xj, yj, zj);
+      gather3Lanes(pv, uj, vj, wj);
+      const M dx = M::all(x[i].x()) - xj, dy = M::all(x[i].y()) - yj, dz = M::all(x[i].z()) - zj;
+      const M du = M::all(v[i].x()) - uj, dv = M::all(v[i].y()) - vj, dw = M::all(v[i].z()) - wj;
+      const M r_sq = dx * dx + dy * dy + dz * dz;
+      const M dwr = kernel.derivativeOverR(sqrt(r_sq));
+      M coeff = M::all(in.pr2[i]) + gatherLanes(zero, in.pr2, j);
+      const M vx = du * dx + dv * dy + dw * dz;
+      coeff = select(vx < zero,
                      coeff + M::all(-in.visc) / (M::all(in.rho[i]) + gatherLanes(zero, in.rho, j)) *
                                  vx / (r_sq + M::all(in.eps_sq)),
                      coeff);
-          const M f = M::all(in.m) * coeff * dwr;
-          // Morris: x . grad W / |x|^2 = dW/dr / r (< 0), so v_a is drawn towards v_b.
-          const M inv_rho_j = gatherLanes(zero, in.inv_rho, j);
-          const M mu = kUniformNu ? M::all(in.nu[0]) * (inv_rho_j + M::all(in.inv_rho[i]))
-                                  : M::all(in.nu[i]) * inv_rho_j +
-                                        gatherLanes(zero, in.nu, j) * M::all(in.inv_rho[i]);
-          const M g = mu * dwr;
-          // lap += g v_ab, written as lap -= -(g v_ab) (the same bits).
-          acc_xy = subtractInOrder(acc_xy, f * dx, f * dy, used);
-          acc_z_lap_x = subtractInOrder(acc_z_lap_x, f * dz, -(g * du), used);
-          lap_yz = subtractInOrder(lap_yz, -(g * dv), -(g * dw), used);
-        });
+      const M f = M::all(in.m) * coeff * dwr;
+      // Morris: x . grad W / |x|^2 = dW/dr / r (< 0), so v_a is drawn towards v_b.
+      const M inv_rho_j = gatherLanes(zero, in.inv_rho, j);
+      const M mu = kUniformNu ? M::all(in.nu[0]) * (inv_rho_j + M::all(in.inv_rho[i]))
+                              : M::all(in.nu[i]) * inv_rho_j +
+                                    gatherLanes(zero, in.nu, j) * M::all(in.inv_rho[i]);
+      const M g = mu * dwr;
+      // lap += g v_ab, written as lap -= -(g v_ab) (the same bits).
+      const M ax = f * dx, ay = f * dy, az = f * dz;
+      const M lx = -(g * du), ly = -(g * dv), lz = -(g * dw);
+      acc_xy = subtractInOrder(acc_xy, ax, ay, used);
+      acc_z_lap_x = subtractInOrder(acc_z_lap_x, az, lx, used);
+      lap_yz = subtractInOrder(lap_yz, ly, lz, used);
+      if (!both) return;
+      double* other[M::kWidth];
+      for (int t = 0; t < M::kWidth; ++t)
+        other[t] = j[t] < end ? sums + 6 * std::size_t(j[t]) : nullptr;
+      addToPairs(other, ax, ay, used);
+      for (int t = 0; t < M::kWidth; ++t)
+        if (other[t]) other[t] += 2;
+      addToPairs(other, az, lx, used);
+      for (int t = 0; t < M::kWidth; ++t)
+        if (other[t]) other[t] += 2;
+      addToPairs(other, ly, lz, used);
+    });
+    if (!both) {
+      acc_xy.store(own);
+      acc_z_lap_x.store(own + 2);
+      lap_yz.store(own + 4);
+      return;
+    }
     Vec3 acc(acc_xy.lane0(), acc_xy.lane1(), acc_z_lap_x.lane0());
     const Vec3 lap(acc_z_lap_x.lane1(), lap_yz.lane0(), lap_yz.lane1());
     acc += in.m * lap + in.gravity;
     if (in.add) acc += in.add[i];
     in.out[i] = acc;
-  }
+  };
+  for (std::int64_t i = i0; i < i1; ++i)
+    add(i, list.offset[i], firstAtOrAfter(list, i, static_cast<std::uint32_t>(i0)), false);
+  for (std::int64_t i = i0; i < i1; ++i)
+    add(i, laterStart(list, i), list.offset[i + 1], true);
 }
 
 template <bool kUniformNu>
@@ -321,9 +391,9 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
 #if defined(WAKE_HAS_LANES4)
   if (wide_lanes_) range = uniform ? accelerationRange4<true> : accelerationRange4<false>;
 #endif
-#pragma omp parallel for schedule(static)
-  for (std::int64_t b = 0; b < n; b += kBlock)
-    range(b, std::min(n, b + kBlock), in);
+  pair_sums_.resize(6 * state_.size());
+  in.sums = pair_sums_.data();
+  forEachThreadRange(n, [&](std::int64_t i0, std::int64_t i1) { range(i0, i1, in); });
 }
 
 double Fluid::maxSpeed() const {

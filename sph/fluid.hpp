@@ -150,6 +150,7 @@ class Fluid {
   std::vector<std::uint32_t> order_;   ///< (n) scratch: cell-sort permutation
   std::vector<double> p_over_rho_sq_;  ///< (n) P / rho^2 (m^5 / (kg s^2)), this step
   std::vector<double> inv_rho_;        ///< (n) 1 / rho (m^3/kg), this step
+  std::vector<double> pair_sums_;      ///< (6 n) scratch of the force loop's sums
   bool wide_lanes_ = hasWideLanes();
 };
 

@@ -99,14 +99,15 @@ class UniformGrid {
 struct NeighborList {
   std::vector<std::uint64_t> offset;  ///< (n + 1)
   std::vector<std::uint32_t> index;   ///< (total pairs), never contains i itself
+  /// The number of earlier neighbours (j < i) of each point: its later ones start at
+  /// offset[i] + lower_count[i].
+  std::vector<std::uint32_t> lower_count;  ///< (n)
   /// Scratch of buildNeighborList, kept for the next build and freed with the list: each
   /// thread's lists of the later neighbours (j > i) of its points, where those of point i
-  /// start (upper_start, into its thread's chunk) and how many there are (upper_count),
-  /// and the number of earlier neighbours (lower_count).
+  /// start (upper_start, into its thread's chunk) and how many there are (upper_count).
   std::vector<std::vector<std::uint32_t>> chunks;
   std::vector<std::uint64_t> upper_start;  ///< (n)
   std::vector<std::uint32_t> upper_count;  ///< (n)
-  std::vector<std::uint32_t> lower_count;  ///< (n)
 
   std::size_t size() const { return offset.empty() ? 0 : offset.size() - 1; }
   std::uint64_t begin(std::size_t i) const { return offset[i]; }
