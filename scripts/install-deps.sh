@@ -7,7 +7,7 @@ set -euo pipefail
 packages=(cmake ninja-build g++ make pkg-config
   libeigen3-dev libbullet-dev libhdf5-dev nlohmann-json3-dev libcli11-dev
   libtinyobjloader-dev libgtest-dev libgmock-dev libbenchmark-dev
-  libstb-dev libopenvdb-dev gnuplot-nox)
+  libstb-dev libopenvdb-dev gnuplot-nox ccache)
 if [ "${1:-}" = "--clients" ]; then
   packages+=(blender python3-paraview xvfb libgl1-mesa-dri)
 fi
