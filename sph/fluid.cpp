@@ -111,7 +111,7 @@ void Fluid::updateNeighbors() {
     grid_.reset(domain_, support, 1);
   grid_.sort(state_.position, order_);
   state_.permute(order_, scratch_);
-  buildNeighborList(grid_, state_.position, kernel_.supportRadius(), neighbors_);
+  buildPairLists(grid_, state_.position, kernel_.supportRadius(), neighbors_);
 }
 
 namespace {
@@ -131,45 +131,46 @@ inline void forEachNeighborGroup(const std::uint32_t* nb, std::uint64_t k, std::
   }
 }
 
-/// Where the later neighbours (j > i) of point i start in its list, and where its
-/// neighbours at or after `first` start (the earlier ones ascend: a short scan, only for
-/// the points whose list reaches before `first`).
-inline std::uint64_t laterStart(const NeighborList& list, std::size_t i) {
-  return list.offset[i] + list.lower_count[i];
-}
-inline std::uint64_t firstAtOrAfter(const NeighborList& list, std::size_t i, std::uint32_t first) {
-  std::uint64_t k = list.offset[i];
-  const std::uint64_t later = laterStart(list, i);
-  while (k < later && list.index[k] < first)
-    ++k;
-  return k;
+/// Calls f(lo, hi, r) for each range r = [lo, hi) of the pair lists, in parallel: the
+/// ranges of the symmetric pair loops below (each writes only its own points).
+template <class F>
+void forEachRange(const PairLists& pairs, F&& f) {
+  const std::int64_t ranges = static_cast<std::int64_t>(pairs.ranges());
+#pragma omp parallel for schedule(static, 1)
+  for (std::int64_t r = 0; r < ranges; ++r)
+    f(static_cast<std::int64_t>(pairs.range[r]), static_cast<std::int64_t>(pairs.range[r + 1]),
+      static_cast<std::size_t>(r));
 }
 
-/// Runs f(i0, i1) on each thread for its share [n t / T, n (t + 1) / T) of the points:
-/// the ranges of the symmetric pair loops below.
-template <class F>
-void forEachThreadRange(std::int64_t n, F&& f) {
-#pragma omp parallel
-  {
-    const std::int64_t t = omp_get_thread_num(), nt = omp_get_num_threads();
-    f(n * t / nt, n * (t + 1) / nt);
+/// The earlier neighbours of point i before its range's start (range r from lo):
+/// nb[k .. e), or an empty range.
+inline void beforeRange(const PairLists& pairs, std::size_t r, std::int64_t lo, std::int64_t i,
+                        const std::uint32_t*& nb, std::uint64_t& k, std::uint64_t& e) {
+  const std::vector<std::uint32_t>& off = pairs.before_offset[r];
+  const std::size_t q = static_cast<std::size_t>(i - lo);
+  nb = pairs.before[r].data();
+  k = e = 0;
+  if (q + 1 < off.size()) {
+    k = off[q];
+    e = off[q + 1];
   }
 }
 
-/// Summation density of the particles [i0, i1) (one thread's range), several neighbours
-/// at a time (the kernel without branches). Each pair's kernel value is computed once,
-/// from its lower index, and added to both particles' sums; a pair with a particle before
-/// i0 is computed from inside the range. Each particle's terms are still added in its
-/// list's order (the earlier neighbours before i0, then those in the range as the loop
-/// reaches them, then its later ones), so the sums are the bits of one neighbour at a
-/// time over the whole list, on any number of threads. `density` holds the partial sums.
+/// Summation density of the particles [i0, i1) (range r of the pair lists), several
+/// neighbours at a time (the kernel without branches). Each pair's kernel value is
+/// computed once, from its lower index, and added to both particles' sums; a pair with a
+/// particle before i0 is computed from inside the range. Each particle's terms are still
+/// added in the order of its whole neighbour list (the earlier neighbours before i0, then
+/// those in the range as the loop reaches them, then its later ones), so the sums are the
+/// bits of one neighbour at a time, on any number of threads. `density` holds the partial
+/// sums.
 template <class L>
-inline void densityRange(std::int64_t i0, std::int64_t i1, const Vec3* x,
-                         const NeighborList& neighbors, const CubicSplineKernel& kernel,
-                         double mass, double self, double* density) {
-  const std::uint32_t* nb = neighbors.index.data();
+inline void densityRange(std::int64_t i0, std::int64_t i1, std::size_t r, const Vec3* x,
+                         const PairLists& pairs, const CubicSplineKernel& kernel, double mass,
+                         double self, double* density) {
   const std::uint32_t end = static_cast<std::uint32_t>(i1);
-  auto sums = [&](std::int64_t i, std::uint64_t k, std::uint64_t e, double start, bool both) {
+  auto sums = [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e,
+                  double start, bool both) {
     Lanes2 sum = Lanes2::all(start);  // lane 0: the sum (lane 1 the same)
     forEachNeighborGroup<L>(nb, k, e, [&](auto lanes, const std::uint32_t* j, int used) {
       using M = decltype(lanes);
@@ -189,37 +190,44 @@ inline void densityRange(std::int64_t i0, std::int64_t i1, const Vec3* x,
     });
     return sum.lane0();
   };
+  for (std::int64_t i = i0; i < i1; ++i) {
+    const std::uint32_t* nb;
+    std::uint64_t k, e;
+    beforeRange(pairs, r, i0, i, nb, k, e);
+    density[i] = sums(i, nb, k, e, 0.0, false);
+  }
+  const std::uint32_t* later = pairs.later[r].data();
   for (std::int64_t i = i0; i < i1; ++i)
-    density[i] = sums(i, neighbors.offset[i],
-                      firstAtOrAfter(neighbors, i, static_cast<std::uint32_t>(i0)), 0.0, false);
-  for (std::int64_t i = i0; i < i1; ++i)
-    density[i] =
-        self + mass * sums(i, laterStart(neighbors, i), neighbors.offset[i + 1], density[i], true);
+    density[i] = self + mass * sums(i, later, pairs.begin[i], pairs.begin[i] + pairs.count[i],
+                                    density[i], true);
 }
 
-void densityRange2(std::int64_t i0, std::int64_t i1, const Vec3* x, const NeighborList& neighbors,
-                   const CubicSplineKernel& kernel, double mass, double self, double* density) {
-  densityRange<Lanes2>(i0, i1, x, neighbors, kernel, mass, self, density);
+void densityRange2(std::int64_t i0, std::int64_t i1, std::size_t r, const Vec3* x,
+                   const PairLists& pairs, const CubicSplineKernel& kernel, double mass,
+                   double self, double* density) {
+  densityRange<Lanes2>(i0, i1, r, x, pairs, kernel, mass, self, density);
 }
 #if defined(WAKE_HAS_LANES4)
-WAKE_TARGET_AVX void densityRange4(std::int64_t i0, std::int64_t i1, const Vec3* x,
-                                   const NeighborList& neighbors, const CubicSplineKernel& kernel,
+WAKE_TARGET_AVX void densityRange4(std::int64_t i0, std::int64_t i1, std::size_t r, const Vec3* x,
+                                   const PairLists& pairs, const CubicSplineKernel& kernel,
                                    double mass, double self, double* density) {
-  densityRange<Lanes4>(i0, i1, x, neighbors, kernel, mass, self, density);
+  densityRange<Lanes4>(i0, i1, r, x, pairs, kernel, mass, self, density);
 }
 #endif
 
 }  // namespace
 
 void Fluid::computeFluidDensity() {
-  const std::int64_t n = static_cast<std::int64_t>(state_.size());
+  if (neighbors_.size() != state_.size())
+    throw std::logic_error("Fluid::computeFluidDensity before updateNeighbors");
   const double self = mass_ * kernel_.value(0.0);
   auto range = densityRange2;
 #if defined(WAKE_HAS_LANES4)
   if (wide_lanes_) range = densityRange4;
 #endif
-  forEachThreadRange(n, [&](std::int64_t i0, std::int64_t i1) {
-    range(i0, i1, state_.position.data(), neighbors_, kernel_, mass_, self, state_.density.data());
+  forEachRange(neighbors_, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
+    range(i0, i1, r, state_.position.data(), neighbors_, kernel_, mass_, self,
+          state_.density.data());
   });
 }
 
@@ -243,7 +251,7 @@ namespace {
 struct AccelerationInputs {
   const Vec3 *x, *v;
   const double *rho, *inv_rho, *nu, *pr2;
-  const NeighborList* neighbors;
+  const PairLists* neighbors;
   const CubicSplineKernel* kernel;
   double eps_sq, visc, m;
   Vec3 gravity;
@@ -268,15 +276,16 @@ struct AccelerationInputs {
 ///   lap += mu_ab W'(r) / r v_ab.
 /// `sums` (6 per particle: acc, lap) holds the partial sums.
 template <class L, bool kUniformNu>
-inline void accelerationRange(std::int64_t i0, std::int64_t i1, const AccelerationInputs& in) {
-  const NeighborList& list = *in.neighbors;
-  const std::uint32_t* nb = list.index.data();
+inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
+                              const AccelerationInputs& in) {
+  const PairLists& pairs = *in.neighbors;
   const CubicSplineKernel& kernel = *in.kernel;
   const Vec3 *x = in.x, *v = in.v;
   double* sums = in.sums;
   const std::uint32_t end = static_cast<std::uint32_t>(i1);
   // (acc.x, acc.y), (acc.z, lap.x), (lap.y, lap.z)
-  auto add = [&](std::int64_t i, std::uint64_t k, std::uint64_t e, bool both) {
+  auto add = [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e,
+                 bool both) {
     double* own = sums + 6 * i;
     Lanes2 acc_xy{}, acc_z_lap_x{}, lap_yz{};
     if (both) {
@@ -344,27 +353,35 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, const Accelerati
     if (in.add) acc += in.add[i];
     in.out[i] = acc;
   };
+  for (std::int64_t i = i0; i < i1; ++i) {
+    const std::uint32_t* nb;
+    std::uint64_t k, e;
+    beforeRange(pairs, r, i0, i, nb, k, e);
+    add(i, nb, k, e, false);
+  }
+  const std::uint32_t* later = pairs.later[r].data();
   for (std::int64_t i = i0; i < i1; ++i)
-    add(i, list.offset[i], firstAtOrAfter(list, i, static_cast<std::uint32_t>(i0)), false);
-  for (std::int64_t i = i0; i < i1; ++i)
-    add(i, laterStart(list, i), list.offset[i + 1], true);
+    add(i, later, pairs.begin[i], pairs.begin[i] + pairs.count[i], true);
 }
 
 template <bool kUniformNu>
-void accelerationRange2(std::int64_t i0, std::int64_t i1, const AccelerationInputs& in) {
-  accelerationRange<Lanes2, kUniformNu>(i0, i1, in);
+void accelerationRange2(std::int64_t i0, std::int64_t i1, std::size_t r,
+                        const AccelerationInputs& in) {
+  accelerationRange<Lanes2, kUniformNu>(i0, i1, r, in);
 }
 #if defined(WAKE_HAS_LANES4)
 template <bool kUniformNu>
-WAKE_TARGET_AVX void accelerationRange4(std::int64_t i0, std::int64_t i1,
+WAKE_TARGET_AVX void accelerationRange4(std::int64_t i0, std::int64_t i1, std::size_t r,
                                         const AccelerationInputs& in) {
-  accelerationRange<Lanes4, kUniformNu>(i0, i1, in);
+  accelerationRange<Lanes4, kUniformNu>(i0, i1, r, in);
 }
 #endif
 
 }  // namespace
 
 void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& extra) {
+  if (neighbors_.size() != state_.size())
+    throw std::logic_error("Fluid::computeAccelerations before updateNeighbors");
   const std::int64_t n = static_cast<std::int64_t>(state_.size());
   const double* nu = state_.kinematic_viscosity.data();
   bool uniform = true;
@@ -393,7 +410,8 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
 #endif
   pair_sums_.resize(6 * state_.size());
   in.sums = pair_sums_.data();
-  forEachThreadRange(n, [&](std::int64_t i0, std::int64_t i1) { range(i0, i1, in); });
+  forEachRange(neighbors_,
+               [&](std::int64_t i0, std::int64_t i1, std::size_t r) { range(i0, i1, r, in); });
 }
 
 double Fluid::maxSpeed() const {

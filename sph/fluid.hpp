@@ -96,7 +96,8 @@ class Fluid {
 
   FluidState& state() { return state_; }
   const FluidState& state() const { return state_; }
-  const NeighborList& neighbors() const { return neighbors_; }
+  /// The pairs within the support radius, each once (buildPairLists).
+  const PairLists& neighbors() const { return neighbors_; }
   /// Bounds of the particles' positions at the last updateNeighbors (empty: none).
   const Aabb& particleBounds() const { return bounds_; }
 
@@ -146,7 +147,7 @@ class Fluid {
   FluidState own_;     ///< the state when the caller gave none
   FluidState& state_;  ///< the state stepped: the caller's or own_
   FluidState scratch_;
-  NeighborList neighbors_;
+  PairLists neighbors_;
   std::vector<std::uint32_t> order_;   ///< (n) scratch: cell-sort permutation
   std::vector<double> p_over_rho_sq_;  ///< (n) P / rho^2 (m^5 / (kg s^2)), this step
   std::vector<double> inv_rho_;        ///< (n) 1 / rho (m^3/kg), this step

@@ -62,38 +62,65 @@ void UniformGrid::sort(const std::vector<Vec3>& points, std::vector<std::uint32_
   cell_start_[0] = 0;
 }
 
-void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
-                       NeighborList& out) {
+std::size_t PairLists::rangeOf(std::size_t i) const {
+  return static_cast<std::size_t>(std::upper_bound(range.begin(), range.end(), i) - range.begin()) -
+         1;
+}
+
+namespace {
+
+/// Calls f(j, i) for each pair j < i with i in [lo, hi) and j in [first, hi), in ascending
+/// j (and i for one j): the earlier neighbours of the points [lo, hi) from `first` on,
+/// read from the later lists.
+template <class F>
+void forEachEarlier(const PairLists& pairs, std::size_t first, std::size_t lo, std::size_t hi,
+                    F&& f) {
+  if (first >= hi) return;
+  std::size_t r = pairs.rangeOf(first);
+  for (std::size_t j = first; j < hi; ++j) {
+    while (pairs.range[r + 1] <= j)
+      ++r;
+    const std::uint32_t* later = pairs.later[r].data() + pairs.begin[j];
+    for (std::uint32_t k = 0, m = pairs.count[j]; k < m; ++k) {
+      const std::uint32_t i = later[k];
+      if (i >= hi) break;  // ascending
+      if (i >= lo) f(static_cast<std::uint32_t>(j), i);
+    }
+  }
+}
+
+}  // namespace
+
+void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
+                    PairLists& out) {
   const std::size_t n = points.size();
   const double radius_sq = radius * radius;
-  out.offset.assign(n + 1, 0);
-  out.upper_start.resize(n);
-  out.upper_count.resize(n);
-  out.lower_count.resize(n);
   const int threads = omp_get_max_threads();
-  if (out.chunks.size() < static_cast<std::size_t>(threads))
-    out.chunks.resize(static_cast<std::size_t>(threads));
-  // Largest j - i of a pair i < j: how far back the earlier neighbours of a point lie.
-  std::vector<std::size_t> spans(static_cast<std::size_t>(threads), 0);
-#pragma omp parallel num_threads(threads)
-  {
-    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
-    const std::size_t nt = static_cast<std::size_t>(omp_get_num_threads());
-    auto chunk_begin = [&](std::size_t k) { return n * k / nt; };
-    const std::size_t lo = chunk_begin(t), hi = chunk_begin(t + 1);
-
-    // 1. Each thread lists the later neighbours of its points (every pair tested once).
-    //    Branch-free append: write every candidate, advance the cursor only for neighbours.
-    std::vector<std::uint32_t>& local = out.chunks[t];
+  const std::size_t ranges = static_cast<std::size_t>(threads);
+  out.range.resize(ranges + 1);
+  for (std::size_t r = 0; r <= ranges; ++r)
+    out.range[r] = n * r / ranges;
+  out.later.resize(ranges);
+  out.before_offset.resize(ranges);
+  out.before.resize(ranges);
+  out.begin.resize(n);
+  out.count.resize(n);
+  std::vector<std::size_t> spans(ranges, 0);
+#pragma omp parallel for schedule(static, 1) num_threads(threads)
+  for (std::int64_t sr = 0; sr < static_cast<std::int64_t>(ranges); ++sr) {
+    // The later neighbours of the range's points (every pair tested once). Branch-free
+    // append: write every candidate, advance the cursor only for neighbours.
+    const std::size_t r = static_cast<std::size_t>(sr);
+    std::vector<std::uint32_t>& local = out.later[r];
     std::size_t used = 0, span = 0;
-    for (std::size_t i = lo; i < hi; ++i) {
+    for (std::size_t i = out.range[r]; i < out.range[r + 1]; ++i) {
       const double xi = points[i][0], yi = points[i][1], zi = points[i][2];
       const std::size_t before = used;
       grid.forEachNeighborRange(points[i], [&](std::uint32_t b, std::uint32_t e) {
         if (b <= i) b = static_cast<std::uint32_t>(i + 1);  // the ranges ascend: j > i only
         if (b >= e) return;
-        // Grown by a quarter (the buffer stays for the next steps, beside the list it is
-        // copied into: doubling left up to twice the list's size unused).
+        // Grown by a quarter (the buffer stays for the next steps: doubling left up to
+        // twice the lists' size unused).
         if (local.size() < used + (e - b))
           local.resize(used + (e - b) + std::max<std::size_t>(used / 4, 4096));
         std::uint32_t* dst = local.data();
@@ -105,53 +132,77 @@ void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points,
           used += static_cast<std::size_t>(dx * dx + dy * dy + dz * dz < radius_sq);
         }
       });
-      out.upper_start[i] = before;
-      out.upper_count[i] = static_cast<std::uint32_t>(used - before);
-      out.lower_count[i] = 0;
+      out.begin[i] = before;
+      out.count[i] = static_cast<std::uint32_t>(used - before);
       if (used > before) span = std::max<std::size_t>(span, local[used - 1] - i);
     }
-    spans[t] = span;
-#pragma omp barrier
-    // 2. The earlier neighbours of point i are the j < i whose later lists hold i: scan
-    //    the lists of j in [lo - span, hi) in ascending j, keeping the entries in [lo, hi).
-    const std::size_t reach = *std::max_element(spans.begin(), spans.end());
-    auto for_each_earlier = [&](auto&& f) {
-      const std::size_t first = lo > reach ? lo - reach : 0;
-      if (first >= hi) return;
-      std::size_t c = 0;
-      while (chunk_begin(c + 1) <= first)
-        ++c;
-      for (std::size_t j = first; j < hi; ++j) {
-        while (chunk_begin(c + 1) <= j)
-          ++c;
-        const std::uint32_t* later = out.chunks[c].data() + out.upper_start[j];
-        for (std::uint32_t k = 0, m = out.upper_count[j]; k < m; ++k) {
-          const std::uint32_t i = later[k];
-          if (i >= hi) break;  // ascending
-          if (i >= lo) f(static_cast<std::uint32_t>(j), i);
-        }
-      }
-    };
-    for_each_earlier([&](std::uint32_t, std::uint32_t i) { ++out.lower_count[i]; });
-    for (std::size_t i = lo; i < hi; ++i)
-      out.offset[i + 1] = out.lower_count[i] + out.upper_count[i];
-#pragma omp barrier
-#pragma omp single
-    {
-      for (std::size_t i = 0; i < n; ++i)
-        out.offset[i + 1] += out.offset[i];
-      out.index.resize(out.offset[n]);
-    }
-    // 3. Each list: its earlier neighbours (ascending j), then its later ones.
+    spans[r] = span;
+  }
+  out.span = ranges ? *std::max_element(spans.begin(), spans.end()) : 0;
+  // The earlier neighbours before each range's start: pairs (j, i) with j < lo <= i have
+  // i - j <= span, so only the range's first `span` points have any.
+#pragma omp parallel for schedule(static, 1) num_threads(threads)
+  for (std::int64_t sr = 0; sr < static_cast<std::int64_t>(ranges); ++sr) {
+    const std::size_t r = static_cast<std::size_t>(sr);
+    const std::size_t lo = out.range[r], hi = std::min(out.range[r + 1], lo + out.span);
+    const std::size_t first = lo > out.span ? lo - out.span : 0;
+    std::vector<std::uint32_t>& off = out.before_offset[r];
+    std::vector<std::uint32_t>& list = out.before[r];
+    off.assign(hi - lo + 1, 0);
+    forEachEarlier(out, first, lo, hi, [&](std::uint32_t j, std::uint32_t i) {
+      if (j < lo) ++off[i - lo + 1];
+    });
+    for (std::size_t q = 1; q < off.size(); ++q)
+      off[q] += off[q - 1];
+    list.resize(off.back());
+    // off[q] serves as point q's cursor, then is restored.
+    forEachEarlier(out, first, lo, hi, [&](std::uint32_t j, std::uint32_t i) {
+      if (j < lo) list[off[i - lo]++] = j;
+    });
+    for (std::size_t q = off.size() - 1; q > 0; --q)
+      off[q] = off[q - 1];
+    off[0] = 0;
+  }
+}
+
+void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
+                       NeighborList& out) {
+  const std::size_t n = points.size();
+  buildPairLists(grid, points, radius, out.pairs);
+  const PairLists& pairs = out.pairs;
+  out.offset.assign(n + 1, 0);
+  out.lower_count.resize(n);
+  const std::int64_t ranges = static_cast<std::int64_t>(pairs.ranges());
+  // The earlier neighbours of point i are the j < i whose later lists hold i: each range
+  // scans the lists of j in [lo - span, hi).
+  auto first_of = [&](std::size_t lo) { return lo > pairs.span ? lo - pairs.span : 0; };
+#pragma omp parallel for schedule(static, 1)
+  for (std::int64_t r = 0; r < ranges; ++r) {
+    const std::size_t lo = pairs.range[r], hi = pairs.range[r + 1];
     for (std::size_t i = lo; i < hi; ++i)
       out.lower_count[i] = 0;
-    std::uint32_t* index = out.index.data();
-    for_each_earlier(
-        [&](std::uint32_t j, std::uint32_t i) { index[out.offset[i] + out.lower_count[i]++] = j; });
+    forEachEarlier(pairs, first_of(lo), lo, hi,
+                   [&](std::uint32_t, std::uint32_t i) { ++out.lower_count[i]; });
     for (std::size_t i = lo; i < hi; ++i)
-      if (out.upper_count[i] > 0)
-        std::memcpy(index + out.offset[i] + out.lower_count[i], local.data() + out.upper_start[i],
-                    out.upper_count[i] * sizeof(std::uint32_t));
+      out.offset[i + 1] = out.lower_count[i] + pairs.count[i];
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    out.offset[i + 1] += out.offset[i];
+  out.index.resize(out.offset[n]);
+  // Each list: its earlier neighbours (ascending j), then its later ones.
+  std::uint32_t* index = out.index.data();
+#pragma omp parallel for schedule(static, 1)
+  for (std::int64_t r = 0; r < ranges; ++r) {
+    const std::size_t lo = pairs.range[r], hi = pairs.range[r + 1];
+    for (std::size_t i = lo; i < hi; ++i)
+      out.lower_count[i] = 0;
+    forEachEarlier(pairs, first_of(lo), lo, hi, [&](std::uint32_t j, std::uint32_t i) {
+      index[out.offset[i] + out.lower_count[i]++] = j;
+    });
+    for (std::size_t i = lo; i < hi; ++i)
+      if (pairs.count[i] > 0)
+        std::memcpy(index + out.offset[i] + out.lower_count[i],
+                    pairs.later[r].data() + pairs.begin[i], pairs.count[i] * sizeof(std::uint32_t));
   }
 }
 

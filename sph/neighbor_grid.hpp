@@ -95,6 +95,36 @@ class UniformGrid {
   std::vector<std::uint32_t> cell_of_;     // (points) scratch
 };
 
+/// Each pair of points within a radius once, in the list of its lower index: what the
+/// symmetric pair loops (sph/fluid.cpp) read. The points are cut into ranges, one per
+/// thread of the build (a loop over the pairs runs range by range, each range writing only
+/// its own points):
+/// - the later neighbours (j > i) of point i, ascending, are
+///   later[r][begin[i] .. begin[i] + count[i]) (r: i's range);
+/// - the earlier neighbours of point i that lie before its range's start (the pairs a
+///   range computes from its own side), ascending, are before[r][before_offset[r][q] ..
+///   before_offset[r][q + 1]) with q = i - range[r], for q < before_offset[r].size() - 1;
+///   the range's later points have none.
+struct PairLists {
+  std::vector<std::size_t> range;  ///< (ranges + 1): range r is [range[r], range[r + 1])
+  std::vector<std::vector<std::uint32_t>> later;                  ///< (ranges)
+  std::vector<std::uint64_t> begin;                               ///< (n) into later[r]
+  std::vector<std::uint32_t> count;                               ///< (n)
+  std::vector<std::vector<std::uint32_t>> before_offset, before;  ///< (ranges)
+  std::size_t span = 0;                                           ///< largest j - i of a pair
+
+  std::size_t size() const { return count.size(); }
+  std::size_t ranges() const { return range.empty() ? 0 : range.size() - 1; }
+  /// The range of point i.
+  std::size_t rangeOf(std::size_t i) const;
+};
+
+/// Builds the pair lists of the sorted points within `radius` (strictly closer), one range
+/// per OpenMP thread. `points` must be in the grid's sorted order. The lists do not depend
+/// on the number of threads; only where the ranges are cut does.
+void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
+                    PairLists& out);
+
 /// Flat neighbour lists: neighbours of point i are index[offset[i] .. offset[i + 1]).
 struct NeighborList {
   std::vector<std::uint64_t> offset;  ///< (n + 1)
@@ -102,12 +132,7 @@ struct NeighborList {
   /// The number of earlier neighbours (j < i) of each point: its later ones start at
   /// offset[i] + lower_count[i].
   std::vector<std::uint32_t> lower_count;  ///< (n)
-  /// Scratch of buildNeighborList, kept for the next build and freed with the list: each
-  /// thread's lists of the later neighbours (j > i) of its points, where those of point i
-  /// start (upper_start, into its thread's chunk) and how many there are (upper_count).
-  std::vector<std::vector<std::uint32_t>> chunks;
-  std::vector<std::uint64_t> upper_start;  ///< (n)
-  std::vector<std::uint32_t> upper_count;  ///< (n)
+  PairLists pairs;                         ///< scratch of buildNeighborList: each pair once
 
   std::size_t size() const { return offset.empty() ? 0 : offset.size() - 1; }
   std::uint64_t begin(std::size_t i) const { return offset[i]; }
@@ -115,9 +140,9 @@ struct NeighborList {
 };
 
 /// Builds the lists of all sorted points within `radius` (strictly closer) of each point,
-/// each list in ascending order. `points` must be in the grid's sorted order. Each pair is
-/// tested once (from its lower index); the earlier neighbours of a point are then read from
-/// the others' lists. OpenMP; the result does not depend on the number of threads.
+/// each list in ascending order: the pair lists (buildPairLists), each point's earlier
+/// neighbours then read from the others' lists. `points` must be in the grid's sorted
+/// order. OpenMP; the result does not depend on the number of threads.
 void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
                        NeighborList& out);
 

@@ -126,66 +126,73 @@ TEST(Determinism, SameAccelerationsWithOneAndTwoThreads) {
     ASSERT_EQ(one[i], two[i]) << i;
 }
 
-/// The pair loops take several neighbours at a time (SIMD lanes, branches as masks) but
-/// must add each neighbour's terms in list order: the same bits as the one-at-a-time
-/// sums written out below, with two lanes and (where the CPU has AVX) four, with one
-/// fluid's viscosity and with a viscosity per particle.
+/// The pair loops take several neighbours at a time (SIMD lanes, branches as masks) and
+/// compute each pair once for both particles, but must add each neighbour's terms in list
+/// order: the same bits as the one-at-a-time sums over every neighbour written out below,
+/// with two lanes and (where the CPU has AVX) four, with one fluid's viscosity and with a
+/// viscosity per particle, on one thread and on three (pairs across the ranges).
 TEST(Determinism, PairLoopsGiveTheBitsOfOneNeighbourAtATime) {
-  for (bool per_particle_nu : {false, true}) {
-    for (bool wide : {false, true}) {
-      Fluid fluid(testParams(), kDomain);
-      fillLattice(fluid, 9, 0.018);
-      std::mt19937 rng(11);
-      std::uniform_real_distribution<double> u(-1, 1);
-      FluidState& st = fluid.state();
-      for (std::size_t i = 0; i < st.size(); ++i) {
-        st.position[i] += 0.003 * Vec3(u(rng), u(rng), u(rng));
-        st.velocity[i] = Vec3(u(rng), u(rng), u(rng));
-        if (per_particle_nu) st.kinematic_viscosity[i] = 1e-6 * (2.0 + u(rng));
-      }
-      fluid.setWideLanes(wide);
-      fluid.updateNeighbors();
-      fluid.computeFluidDensity();
-      const std::vector<double> density = st.density;
-      fluid.computePressure();
-      fluid.computeAccelerations(Vec3(0, -9.81, 0));
-
-      const CubicSplineKernel& kernel = fluid.kernel();
-      const NeighborList& nb = fluid.neighbors();
-      const double m = fluid.particleMass(), h = kernel.smoothingLength();
-      const double eps_sq = 0.01 * h * h;
-      const double visc = 2.0 * fluid.params().viscosity * h * fluid.params().speed_of_sound;
-      for (std::size_t i = 0; i < st.size(); ++i) {
-        double sum = 0.0;
-        for (std::uint64_t k = nb.begin(i); k < nb.end(i); ++k)
-          sum += kernel.value((st.position[i] - st.position[nb.index[k]]).norm());
-        ASSERT_EQ(density[i], m * kernel.value(0.0) + m * sum) << i;
-      }
-      for (std::size_t i = 0; i < st.size(); ++i) {
-        const double rho_i = st.density[i], inv_rho_i = 1.0 / rho_i;
-        const double pr2_i = st.pressure[i] * inv_rho_i * inv_rho_i;
-        Vec3 acc = Vec3::Zero(), lap = Vec3::Zero();
-        for (std::uint64_t k = nb.begin(i); k < nb.end(i); ++k) {
-          const std::uint32_t j = nb.index[k];
-          const double inv_rho_j = 1.0 / st.density[j];
-          const Vec3 xij = st.position[i] - st.position[j];
-          const Vec3 vij = st.velocity[i] - st.velocity[j];
-          const double r_sq = xij.squaredNorm();
-          const double dwr = kernel.derivativeOverR(std::sqrt(r_sq));
-          double coeff = pr2_i + st.pressure[j] * inv_rho_j * inv_rho_j;
-          const double vx = vij.dot(xij);
-          if (vx < 0.0) coeff += -visc / (rho_i + st.density[j]) * vx / (r_sq + eps_sq);
-          acc -= (m * coeff * dwr) * xij;
-          const double mu = per_particle_nu ? st.kinematic_viscosity[i] * inv_rho_j +
-                                                  st.kinematic_viscosity[j] * inv_rho_i
-                                            : st.kinematic_viscosity[0] * (inv_rho_j + inv_rho_i);
-          lap += (mu * dwr) * vij;
+  const int threads_before = omp_get_max_threads();
+  for (int threads : {1, 3})  // one range, and pairs that cross ranges
+    for (bool per_particle_nu : {false, true}) {
+      for (bool wide : {false, true}) {
+        omp_set_num_threads(threads);
+        Fluid fluid(testParams(), kDomain);
+        fillLattice(fluid, 9, 0.018);
+        std::mt19937 rng(11);
+        std::uniform_real_distribution<double> u(-1, 1);
+        FluidState& st = fluid.state();
+        for (std::size_t i = 0; i < st.size(); ++i) {
+          st.position[i] += 0.003 * Vec3(u(rng), u(rng), u(rng));
+          st.velocity[i] = Vec3(u(rng), u(rng), u(rng));
+          if (per_particle_nu) st.kinematic_viscosity[i] = 1e-6 * (2.0 + u(rng));
         }
-        acc += m * lap + Vec3(0, -9.81, 0);
-        ASSERT_EQ(st.acceleration[i], acc)
-            << "particle " << i << (wide ? ", wide lanes" : ", two lanes")
-            << (per_particle_nu ? ", viscosity per particle" : "");
+        fluid.setWideLanes(wide);
+        fluid.updateNeighbors();
+        fluid.computeFluidDensity();
+        const std::vector<double> density = st.density;
+        fluid.computePressure();
+        fluid.computeAccelerations(Vec3(0, -9.81, 0));
+
+        const CubicSplineKernel& kernel = fluid.kernel();
+        NeighborList nb;  // every neighbour of each particle, ascending
+        buildNeighborList(fluid.grid(), st.position, kernel.supportRadius(), nb);
+        const double m = fluid.particleMass(), h = kernel.smoothingLength();
+        const double eps_sq = 0.01 * h * h;
+        const double visc = 2.0 * fluid.params().viscosity * h * fluid.params().speed_of_sound;
+        for (std::size_t i = 0; i < st.size(); ++i) {
+          double sum = 0.0;
+          for (std::uint64_t k = nb.begin(i); k < nb.end(i); ++k)
+            sum += kernel.value((st.position[i] - st.position[nb.index[k]]).norm());
+          ASSERT_EQ(density[i], m * kernel.value(0.0) + m * sum) << i;
+        }
+        for (std::size_t i = 0; i < st.size(); ++i) {
+          const double rho_i = st.density[i], inv_rho_i = 1.0 / rho_i;
+          const double pr2_i = st.pressure[i] * inv_rho_i * inv_rho_i;
+          Vec3 acc = Vec3::Zero(), lap = Vec3::Zero();
+          for (std::uint64_t k = nb.begin(i); k < nb.end(i); ++k) {
+            const std::uint32_t j = nb.index[k];
+            const double inv_rho_j = 1.0 / st.density[j];
+            const Vec3 xij = st.position[i] - st.position[j];
+            const Vec3 vij = st.velocity[i] - st.velocity[j];
+            const double r_sq = xij.squaredNorm();
+            const double dwr = kernel.derivativeOverR(std::sqrt(r_sq));
+            double coeff = pr2_i + st.pressure[j] * inv_rho_j * inv_rho_j;
+            const double vx = vij.dot(xij);
+            if (vx < 0.0) coeff += -visc / (rho_i + st.density[j]) * vx / (r_sq + eps_sq);
+            acc -= (m * coeff * dwr) * xij;
+            const double mu = per_particle_nu ? st.kinematic_viscosity[i] * inv_rho_j +
+                                                    st.kinematic_viscosity[j] * inv_rho_i
+                                              : st.kinematic_viscosity[0] * (inv_rho_j + inv_rho_i);
+            lap += (mu * dwr) * vij;
+          }
+          acc += m * lap + Vec3(0, -9.81, 0);
+          ASSERT_EQ(st.acceleration[i], acc)
+              << "particle " << i << (wide ? ", wide lanes" : ", two lanes")
+              << (per_particle_nu ? ", viscosity per particle" : "") << ", " << threads
+              << " threads";
+        }
       }
     }
-  }
+  omp_set_num_threads(threads_before);
 }

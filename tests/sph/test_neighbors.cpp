@@ -24,7 +24,7 @@ std::vector<std::set<std::uint32_t>> bruteForce(const std::vector<Vec3>& x, doub
 /// Sorts the points by cell, builds lists, and compares with brute force on sorted points:
 /// with cells of the radius (reach 1) and of half of it (reach 2), on 1, 2, 3 and 7 threads
 /// (more threads than points included). Each list must ascend and be the same on any
-/// number of threads.
+/// number of threads; so must the pair lists' later and before-the-range lists.
 void expectMatchesBruteForce(std::vector<Vec3> x, const Aabb& domain, double r) {
   for (int reach : {1, 2}) {
     UniformGrid grid(domain, r / reach, UniformGrid::kMaxCells, reach);
@@ -56,6 +56,34 @@ void expectMatchesBruteForce(std::vector<Vec3> x, const Aabb& domain, double r) 
             << " threads)";
         EXPECT_EQ(std::set<std::uint32_t>(got.begin(), got.end()), expected[i])
             << "particle " << i << ", reach " << reach << ", " << threads << " threads";
+      }
+      // The pair lists: each point's later neighbours, and those of its earlier ones
+      // that lie before its range's start (one range per thread).
+      PairLists pairs;
+      buildPairLists(grid, sorted, r, pairs);
+      ASSERT_EQ(pairs.size(), sorted.size());
+      ASSERT_EQ(pairs.ranges(), std::size_t(threads));
+      ASSERT_EQ(pairs.range.front(), 0u);
+      ASSERT_EQ(pairs.range.back(), sorted.size());
+      for (std::size_t rg = 0; rg < pairs.ranges(); ++rg) {
+        const std::size_t lo = pairs.range[rg];
+        const std::vector<std::uint32_t>& off = pairs.before_offset[rg];
+        for (std::size_t i = lo; i < pairs.range[rg + 1]; ++i) {
+          ASSERT_EQ(pairs.rangeOf(i), rg);
+          const std::uint32_t* later = pairs.later[rg].data() + pairs.begin[i];
+          const std::vector<std::uint32_t> got_later(later, later + pairs.count[i]);
+          std::vector<std::uint32_t> want_later, want_before;
+          for (std::uint32_t j : expected[i]) {  // ascending
+            if (j > i) want_later.push_back(j);
+            if (j < lo) want_before.push_back(j);
+          }
+          EXPECT_EQ(got_later, want_later) << "point " << i << ", " << threads << " threads";
+          std::vector<std::uint32_t> got_before;
+          if (i - lo + 1 < off.size())
+            got_before.assign(pairs.before[rg].begin() + off[i - lo],
+                              pairs.before[rg].begin() + off[i - lo + 1]);
+          EXPECT_EQ(got_before, want_before) << "point " << i << ", " << threads << " threads";
+        }
       }
       if (threads == 1) {
         first = list;
