@@ -173,20 +173,49 @@ void Boundaries::buildSet(SampleSet& set, const Aabb& box, const std::vector<Vec
   }
 }
 
-void Boundaries::markInterior(SampleSet& set, const Body& body) {
-  // A cell beyond contact reach of every sample is wholly inside or wholly outside the
-  // body (its surface passes within a spacing of its samples): its centre tells which.
+template <class Inside>
+void Boundaries::markInteriorRuns(SampleSet& set, Inside&& inside) {
+  // A cell beyond contact reach of every sample is wholly inside or wholly outside each
+  // body (a surface passes within a spacing of its samples), and so is a run of such
+  // cells along x (connected, and no surface passes through it): the centre of its first
+  // cell tells which, one shape query per run.
   const Eigen::Vector3i dims = set.grid.dims();
-  const std::int64_t cells = static_cast<std::int64_t>(set.grid.cellCount());
-#pragma omp parallel for schedule(static)
-  for (std::int64_t c = 0; c < cells; ++c) {
-    if (set.near[c] & kNearContact) continue;
-    const Eigen::Vector3i coord(static_cast<int>(c % dims[0]),
-                                static_cast<int>((c / dims[0]) % dims[1]),
-                                static_cast<int>(c / (std::int64_t(dims[0]) * dims[1])));
-    if (body.settings.shape->signedDistance(set.grid.cellCenter(coord)) < 0.0)
-      set.near[c] |= kInterior;
+  const std::int64_t rows = std::int64_t(dims[1]) * dims[2];
+#pragma omp parallel for schedule(dynamic, 64)
+  for (std::int64_t row = 0; row < rows; ++row) {
+    const int y = static_cast<int>(row % dims[1]), z = static_cast<int>(row / dims[1]);
+    std::uint8_t* flags = set.near.data() + row * dims[0];
+    for (int x = 0; x < dims[0];) {
+      if (flags[x] & kNearContact) {
+        ++x;
+        continue;
+      }
+      int end = x;
+      while (end < dims[0] && !(flags[end] & kNearContact))
+        ++end;
+      if (inside(set.grid.cellCenter(Eigen::Vector3i(x, y, z))))
+        for (int k = x; k < end; ++k)
+          flags[k] |= kInterior;
+      x = end;
+    }
   }
+}
+
+void Boundaries::markInterior(SampleSet& set, const Body& body) {
+  markInteriorRuns(set, [&](const Vec3& p) { return body.settings.shape->contains(p); });
+}
+
+void Boundaries::markStaticInterior() {
+  // The static set's grid covers the whole domain: inside some static body or outside all.
+  markInteriorRuns(static_, [&](const Vec3& p) {
+    for (std::uint32_t b : static_bodies_) {
+      const Body& body = bodies_[b];
+      if (body.start.world_bounds.contains(p) &&
+          body.settings.shape->contains(body.start.pose.toBody(p)))
+        return true;
+    }
+    return false;
+  });
 }
 
 void Boundaries::finalize() {
@@ -207,10 +236,10 @@ void Boundaries::finalize() {
   }
   for (std::size_t bi = 0; bi < bodies_.size(); ++bi)
     if (!bodies_[bi].settings.moves()) static_bodies_.push_back(static_cast<std::uint32_t>(bi));
-  // Static bodies' interiors are not marked: fluid cannot be moved into them (it starts
-  // outside, and no correction sends it through a wall), and a domain-wide grid would
-  // evaluate every static shape (meshes too) at every cell inside it.
-  if (!pos.empty()) buildSet(static_, domain_, pos, nrm, owner, /*flags=*/true);
+  if (!pos.empty()) {
+    buildSet(static_, domain_, pos, nrm, owner, /*flags=*/true);
+    markStaticInterior();
+  }
   // Moving bodies: one body-space set each.
   for (std::size_t bi = 0; bi < bodies_.size(); ++bi) {
     Body& b = bodies_[bi];
@@ -377,17 +406,50 @@ Boundaries::Clearance Boundaries::clearance(const Vec3& x, const BodyPlacement& 
 
 std::size_t Boundaries::countInside(const std::vector<Vec3>& x, const BodyPlacement& at) const {
   const std::int64_t n = static_cast<std::int64_t>(x.size());
+  const bool has_static = !static_.position.empty();
+  // Exactly inside body b (its exact shape), within its bounds.
+  auto in_body = [&](std::size_t b, const Vec3& xi) {
+    const BodyFrame& frame = at[b];
+    return frame.world_bounds.contains(xi) &&
+           bodies_[b].settings.shape->contains(frame.pose.toBody(xi));
+  };
   std::size_t inside = 0;
 #pragma omp parallel for schedule(static) reduction(+ : inside)
   for (std::int64_t i = 0; i < n; ++i) {
-    for (std::size_t b = 0; b < bodies_.size(); ++b) {
-      const BodyFrame& frame = at[b];
-      if (!frame.world_bounds.contains(x[i])) continue;
-      if (bodies_[b].settings.shape->contains(frame.pose.toBody(x[i]))) {
-        ++inside;
-        break;
+    const Vec3& xi = x[i];
+    bool in = false;
+    // A cell beyond contact reach of every sample lies wholly inside or wholly outside
+    // (its kInterior flag): only the cells near a surface need the exact shapes.
+    if (has_static) {
+      if (!static_.reach_box.contains(xi)) {
+        for (std::uint32_t b : static_bodies_)
+          if ((in = in_body(b, xi))) break;
+      } else {
+        const std::uint8_t flags = static_.near[static_.grid.cellIndex(xi)];
+        if (flags & kNearContact) {
+          for (std::uint32_t b : static_bodies_)
+            if ((in = in_body(b, xi))) break;
+        } else {
+          in = (flags & kInterior) != 0;
+        }
       }
     }
+    const bool near_moving = at.moving_reach.contains(xi);
+    for (std::size_t m = 0; m < moving_.size() && !in && near_moving; ++m) {
+      const MovingBody& body = moving_[m];
+      const BodyFrame& frame = at[body.body];
+      if (!frame.world_bounds.contains(xi)) continue;
+      const SampleSet& set = body.samples;
+      const Vec3 p = frame.pose.toBody(xi);
+      if (set.position.empty()) {
+        in = bodies_[body.body].settings.shape->contains(p);
+      } else if (set.reach_box.contains(p)) {  // beyond it: outside (the samples enclose it)
+        const std::uint8_t flags = set.near[set.grid.cellIndex(p)];
+        in = flags & kNearContact ? bodies_[body.body].settings.shape->contains(p)
+                                  : (flags & kInterior) != 0;
+      }
+    }
+    if (in) ++inside;
   }
   return inside;
 }

@@ -254,12 +254,19 @@ class Boundaries {
     SampleSet samples;
   };
   /// Bit 1: a sample within the kernel support may exist; bit 2: within contact reach;
-  /// bit 4 (moving bodies): the cell lies inside the body, beyond contact reach of its
-  /// surface.
+  /// bit 4: the cell lies inside the body (the static set: inside some static body),
+  /// beyond contact reach of its surface.
   static constexpr std::uint8_t kNearDensity = 1, kNearContact = 2, kInterior = 4;
   /// Sets kInterior on the cells of a moving body's `set` (body space) that are not near
   /// its samples and whose centre is inside the body.
   void markInterior(SampleSet& set, const Body& body);
+  /// Sets kInterior on the static set's cells beyond contact reach of every sample that
+  /// lie inside a static body (countInside reads it).
+  void markStaticInterior();
+  /// Sets kInterior on the cells of `set` beyond contact reach of its samples where
+  /// inside(cell centre) holds, one query per run of such cells along x.
+  template <class Inside>
+  static void markInteriorRuns(SampleSet& set, Inside&& inside);
   /// Calls f(body, is_static, signed distance of x to its exact surface) for every body
   /// whose surface may be within contact reach of x (or, moving bodies, that x may be
   /// deep inside): what findContacts and clearance look at.

@@ -136,5 +136,50 @@ TEST(Correction, ParticlesAwayFromBodiesDoNotMove) {
     EXPECT_EQ(x[i], start[i]);
 }
 
+/// countInside reads the cells beyond contact reach of every sample from flags (inside a
+/// body or outside all) and asks the exact shapes only near a surface: at random points
+/// everywhere (deep inside thick static bodies and a moving one, in the tank's walls, near
+/// the surfaces, in the open), one at a time, the count is what the exact shapes give.
+TEST(CountInside, EqualsTheExactShapesEverywhere) {
+  const Aabb domain{Vec3(-0.1, -0.1, -0.1), Vec3(0.7, 0.5, 0.4)};
+  Boundaries b(fluidParams(), domain);
+  b.addBody(staticBody("tank", makeTank(Vec3::Zero(), Vec3(0.6, 0.4, 0.3), 0.04)));
+  b.addBody(staticBody("block", makeBox(Vec3(0.1, 0.08, 0.06)), 0, 0,
+                       Pose{Vec3(0.2, 0.08, 0.15), Quat(Eigen::AngleAxisd(0.3, Vec3::UnitY()))}));
+  b.addBody(
+      staticBody("ball", makeSphere(0.07), 0, 0, Pose{Vec3(0.45, 0.2, 0.15), Quat::Identity()}));
+  BodySettings moving = staticBody("moving", makeBox(Vec3(0.06, 0.05, 0.08)));
+  moving.kind = BodyKind::Dynamic;
+  moving.pose.position = Vec3(0.3, 0.3, 0.15);
+  b.addBody(moving);
+  b.finalize();
+  // The moving box elsewhere and turned, as a step places it.
+  std::vector<RigidState> states(b.bodyCount());
+  for (std::size_t i = 0; i < states.size(); ++i)
+    states[i].pose = b.body(i).pose;
+  states[3].pose.position = Vec3(0.32, 0.27, 0.14);
+  states[3].pose.orientation = Quat(Eigen::AngleAxisd(0.5, Vec3(1, 2, 3).normalized()));
+  BodyPlacement at;
+  b.place(states, at);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::size_t deep = 0, counted = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const Vec3 p = domain.min + Vec3(u(rng), u(rng), u(rng)).cwiseProduct(domain.max - domain.min);
+    double sd = std::numeric_limits<double>::infinity();
+    bool exact = false;
+    for (std::size_t i = 0; i < b.bodyCount(); ++i) {
+      const Vec3 q = at[i].pose.toBody(p);
+      exact = exact || b.body(i).shape->contains(q);
+      sd = std::min(sd, b.body(i).shape->signedDistance(q));
+    }
+    deep += sd < -4.0 * kR;
+    counted += exact;
+    ASSERT_EQ(b.countInside({p}, at), exact ? 1u : 0u) << p.transpose() << ", distance " << sd;
+  }
+  EXPECT_GT(deep, 200u);  // the flags were read: points far inside a body
+  EXPECT_GT(counted, deep);
+}
+
 }  // namespace
 }  // namespace wake::test
