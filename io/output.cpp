@@ -255,6 +255,14 @@ FrameWriter::FrameWriter(const std::string& out_dir, const SceneFile& scene, con
     throw std::runtime_error("cannot resume: the checkpoint's body rows do not match its " +
                              std::to_string(frames) + " frames and " + std::to_string(nb) +
                              " bodies");
+  if (::access(d.h5_partial.c_str(), F_OK) != 0 && ::access(d.h5_final.c_str(), R_OK) == 0) {
+    // A run stopped while it finished (its file renamed, its checkpoint not yet removed):
+    // the final file holds every frame the checkpoint counts. It becomes the partial file
+    // again (its index first, so no index names a missing file) and the frames after the
+    // checkpoint are written again, the same bits.
+    std::remove(d.xdmf_final.c_str());
+    renameFile(d.h5_final, d.h5_partial);
+  }
   if (::access(d.h5_partial.c_str(), R_OK) != 0)
     throw std::runtime_error("cannot resume: " + d.h5_partial + " is missing");
   hdf5::Writer old_file;

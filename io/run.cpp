@@ -223,6 +223,10 @@ RunResult run(const SceneFile& scene, const RunOptions& options, const Start& fr
   const int threads = omp_get_max_threads();
   progress.message(startLine(scene, sim, threads, last_frame, from));
   Writers out = openWriters(scene, options, sim, from);
+  const std::string summary_path = options.out_dir + "/summary.json";
+  // Resuming a run stopped while it finished (files renamed, checkpoint not yet removed):
+  // its summary, if written, is written again at the end.
+  if (from.state) std::remove(summary_path.c_str());
   writeFrames(*world, scene, from, out, progress, checkpoint, last_frame);
 
   RunStats stats;
@@ -234,7 +238,7 @@ RunResult run(const SceneFile& scene, const RunOptions& options, const Start& fr
   result.summary = makeSummary(scene, sim, stats);
   result.h5_path = out.frames->h5Path();
   result.xdmf_path = out.frames->xdmfPath();
-  result.summary_path = options.out_dir + "/summary.json";
+  result.summary_path = summary_path;
   try {
     writeSummary(result.summary_path, result.summary);
   } catch (const std::exception& e) {

@@ -2,6 +2,8 @@
 
 #include "io/files.hpp"
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <stdexcept>
 
@@ -35,6 +37,9 @@ SeriesWriter::SeriesWriter(const std::string& out_dir, const Simulation& sim)
 SeriesWriter::SeriesWriter(const std::string& out_dir, const Simulation& sim, std::size_t frames)
     : partial_(out_dir + "/series.csv.partial"), final_(out_dir + "/series.csv") {
   findMovingBodies(sim);
+  // A run stopped while it finished: its complete series becomes the partial one again.
+  if (::access(partial_.c_str(), F_OK) != 0 && ::access(final_.c_str(), R_OK) == 0)
+    renameFile(final_, partial_);
   std::ifstream in(partial_, std::ios::binary);
   if (!in) throw std::runtime_error("cannot resume: " + partial_ + " is missing");
   std::string kept, line;

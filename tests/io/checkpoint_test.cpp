@@ -227,6 +227,52 @@ TEST(Checkpoint, KilledRunWithBodiesInContactResumesToTheSameOutput) {
   killAndResume(kScenes + "small_stack.json", "0.3", 6 / kKillScale, 13);
 }
 
+TEST(Checkpoint, RunStoppedWhileItFinishesResumesToTheSameOutput) {
+  // A run finishes in steps: its .h5 renamed from .partial, then series.csv, then the
+  // summary written, then the checkpoint removed. Stopped anywhere in between, the folder
+  // holds a checkpoint beside finished files, and --resume still ends in the output of a
+  // run that was never stopped. The states are made exactly: a folder where summary.json
+  // goes makes the run stop after its files are finished and before the checkpoint is
+  // removed; the variants undo the later steps (the series not yet renamed, the xdmf
+  // index not yet written) or add a summary (stopped just before the checkpoint removal).
+  const std::string scene = kScenes + "small_float.json";
+  const std::string name = "small_float";
+  const Reference ref(scene, "0.15");
+  ASSERT_GT(frameCount(ref.frames), 5u);
+  for (const std::string variant : {"files finished", "series not renamed", "summary written"}) {
+    SCOPED_TRACE(variant);
+    const TempDir dir;
+    const fs::path out = dir.path / "out";
+    fs::create_directories(out / "summary.json");
+    test::CliResult r = runWake("run " + inQuotes(scene) + " --out " + inQuotes(out) +
+                                    " --quiet --threads 1 --end 0.15 --checkpoint-every 0.02",
+                                dir.path);
+    ASSERT_NE(r.status, 0) << "the summary cannot be written: the run must say so";
+    EXPECT_NE(r.err.find("summary.json"), std::string::npos) << r.err;
+    ASSERT_TRUE(fs::exists(out / "checkpoint.h5"));
+    ASSERT_TRUE(fs::exists(out / (name + ".h5")));
+    ASSERT_FALSE(fs::exists(out / (name + ".h5.partial")));
+    fs::remove_all(out / "summary.json");
+    fs::remove(out / "summary.json.tmp");
+    if (variant == "series not renamed") {
+      fs::rename(out / "series.csv", out / "series.csv.partial");
+      fs::remove(out / (name + ".xdmf"));
+    } else if (variant == "summary written") {
+      fs::copy_file(ref.dir.path / "out" / "summary.json", out / "summary.json");
+    }
+    r = runWake("run --resume " + inQuotes(out) + " --quiet --threads 1", dir.path);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_FALSE(fs::exists(out / "checkpoint.h5")) << "a complete run keeps no checkpoint";
+    for (const char* partial : {".h5.partial", ".xdmf.partial"})
+      EXPECT_FALSE(fs::exists(out / (name + partial))) << partial;
+    EXPECT_FALSE(fs::exists(out / "series.csv.partial"));
+    EXPECT_TRUE(fs::exists(out / (name + ".xdmf")));
+    EXPECT_TRUE(contents(out / (name + ".h5")) == ref.frames) << "the resumed output differs";
+    EXPECT_EQ(readFile(out / "series.csv"), ref.series);
+    EXPECT_EQ(json::parse(readFile(out / "summary.json"))["state_hash"], ref.hash);
+  }
+}
+
 TEST(Checkpoint, BadResumeCommandsExitTwoNamingTheProblem) {
   const TempDir dir;
   test::CliResult r = runWake("run --resume " + inQuotes(dir.path), dir.path);
