@@ -44,29 +44,17 @@ Eigen::Vector3i gridCells(const Vec3& extent) {
   return n;
 }
 
-/// Volume (m^3) of {p in box : inside(p)} by the midpoint rule on ~kGridCells cells.
-double gridVolume(const Aabb& box, const std::function<bool(const Vec3&)>& inside) {
-  if (!finiteBox(box)) return 0.0;
-  const Vec3 extent = box.max - box.min;
-  if (!(extent.array() > 0.0).all()) return 0.0;
-  const Eigen::Vector3i n = gridCells(extent);
-  const Vec3 cell = extent.cwiseQuotient(n.cast<double>());
-  std::int64_t count = 0;
-#pragma omp parallel for schedule(dynamic, 1) reduction(+ : count)
-  for (int i = 0; i < n.x(); ++i)
-    for (int j = 0; j < n.y(); ++j)
-      for (int k = 0; k < n.z(); ++k)
-        count += inside(box.min + Vec3(i + 0.5, j + 0.5, k + 0.5).cwiseProduct(cell)) ? 1 : 0;
-  return static_cast<double>(count) * cell.prod();
-}
+/// What a volume grid learns at a cell centre: whether it is inside, and how far along
+/// the line of cells (+z, m) that verdict is known to hold (0: that point only).
+struct GridVerdict {
+  bool inside = false;
+  double clear = 0.0;
+};
 
-/// gridVolume of {p : sd(p) < level} for a true distance sd (1-Lipschitz), with fewer
-/// queries: along each line of cells, a point at |sd - level| = g from the level set has
-/// the next points within g on its side, so they are counted without a query. The same
-/// count as one query per cell (the skipped points lie farther than a cell from the
-/// level set), in a time that grows with the surface, not the volume.
-double gridVolumeBySdf(const Aabb& box, const std::function<double(const Vec3&)>& sd,
-                       double level) {
+/// Volume (m^3) of the cells whose centre `look` finds inside, by the midpoint rule on
+/// ~kGridCells cells. Along each line of cells, the next points within a verdict's
+/// `clear` distance (less a margin for rounding) are counted without asking.
+double gridVolumeOf(const Aabb& box, const std::function<GridVerdict(const Vec3&)>& look) {
   if (!finiteBox(box)) return 0.0;
   const Vec3 extent = box.max - box.min;
   if (!(extent.array() > 0.0).all()) return 0.0;
@@ -77,17 +65,32 @@ double gridVolumeBySdf(const Aabb& box, const std::function<double(const Vec3&)>
   for (int i = 0; i < n.x(); ++i)
     for (int j = 0; j < n.y(); ++j)
       for (int k = 0; k < n.z();) {
-        const double d = sd(box.min + Vec3(i + 0.5, j + 0.5, k + 0.5).cwiseProduct(cell));
-        const bool inside = d < level;
-        // The next t points are on the same side while t cells < the gap (less a margin
-        // for rounding).
-        const double reach = std::abs(d - level) * (1.0 - 1e-6) / cell.z();
+        const GridVerdict v = look(box.min + Vec3(i + 0.5, j + 0.5, k + 0.5).cwiseProduct(cell));
+        const double reach = v.clear * (1.0 - 1e-6) / cell.z();
         const int same = static_cast<int>(
             std::min<double>(n.z() - 1 - k, std::max(0.0, std::ceil(reach) - 1.0)));
-        if (inside) count += 1 + same;
+        if (v.inside) count += 1 + same;
         k += 1 + same;
       }
   return static_cast<double>(count) * cell.prod();
+}
+
+/// Volume (m^3) of {p in box : inside(p)}: one query per cell.
+double gridVolume(const Aabb& box, const std::function<bool(const Vec3&)>& inside) {
+  return gridVolumeOf(box, [&](const Vec3& p) { return GridVerdict{inside(p), 0.0}; });
+}
+
+/// Volume (m^3) of {p in box : sd(p) < level} for a true distance sd (1-Lipschitz): a
+/// point at |sd - level| = g from the level set has the next points within g on its side,
+/// so they need no query. The same count as one query per cell (the skipped points lie
+/// farther than a cell from the level set), in a time that grows with the surface, not
+/// the volume.
+double gridVolumeBySdf(const Aabb& box, const std::function<double(const Vec3&)>& sd,
+                       double level) {
+  return gridVolumeOf(box, [&](const Vec3& p) {
+    const double d = sd(p);
+    return GridVerdict{d < level, std::abs(d - level)};
+  });
 }
 
 Aabb intersection(const Aabb& a, const Aabb& b) {
