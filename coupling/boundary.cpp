@@ -407,6 +407,10 @@ Boundaries::Clearance Boundaries::clearance(const Vec3& x, const BodyPlacement& 
 std::size_t Boundaries::countInside(const std::vector<Vec3>& x, const BodyPlacement& at) const {
   const std::int64_t n = static_cast<std::int64_t>(x.size());
   const bool has_static = !static_.position.empty();
+  // A body without samples has no reach box in at.moving_reach: then every particle looks.
+  bool all_sampled = true;
+  for (const MovingBody& m : moving_)
+    all_sampled = all_sampled && !m.samples.position.empty();
   // Exactly inside body b (its exact shape), within its bounds.
   auto in_body = [&](std::size_t b, const Vec3& xi) {
     const BodyFrame& frame = at[b];
@@ -421,20 +425,17 @@ std::size_t Boundaries::countInside(const std::vector<Vec3>& x, const BodyPlacem
     // A cell beyond contact reach of every sample lies wholly inside or wholly outside
     // (its kInterior flag): only the cells near a surface need the exact shapes.
     if (has_static) {
-      if (!static_.reach_box.contains(xi)) {
+      // Outside the grid's box (not where fluid is): the exact shapes too.
+      const std::uint8_t flags =
+          static_.reach_box.contains(xi) ? static_.near[static_.grid.cellIndex(xi)] : kNearContact;
+      if (flags & kNearContact) {
         for (std::uint32_t b : static_bodies_)
           if ((in = in_body(b, xi))) break;
       } else {
-        const std::uint8_t flags = static_.near[static_.grid.cellIndex(xi)];
-        if (flags & kNearContact) {
-          for (std::uint32_t b : static_bodies_)
-            if ((in = in_body(b, xi))) break;
-        } else {
-          in = (flags & kInterior) != 0;
-        }
+        in = (flags & kInterior) != 0;
       }
     }
-    const bool near_moving = at.moving_reach.contains(xi);
+    const bool near_moving = !all_sampled || at.moving_reach.contains(xi);
     for (std::size_t m = 0; m < moving_.size() && !in && near_moving; ++m) {
       const MovingBody& body = moving_[m];
       const BodyFrame& frame = at[body.body];

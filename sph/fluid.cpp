@@ -142,18 +142,24 @@ void forEachRange(const PairLists& pairs, F&& f) {
       static_cast<std::size_t>(r));
 }
 
-/// The earlier neighbours of point i before its range's start (range r from lo):
-/// nb[k .. e), or an empty range.
-inline void beforeRange(const PairLists& pairs, std::size_t r, std::int64_t lo, std::int64_t i,
-                        const std::uint32_t*& nb, std::uint64_t& k, std::uint64_t& e) {
+/// The two passes of a symmetric pair loop over range r = [i0, i1) of the pair lists:
+/// f(i, nb, k, e, false) with each point's earlier neighbours before i0, nb[k .. e)
+/// (maybe none), then f(i, nb, k, e, true) with its later neighbours, point after point.
+template <class F>
+inline void forEachListOfRange(const PairLists& pairs, std::size_t r, std::int64_t i0,
+                               std::int64_t i1, F&& f) {
   const std::vector<std::uint32_t>& off = pairs.before_offset[r];
-  const std::size_t q = static_cast<std::size_t>(i - lo);
-  nb = pairs.before[r].data();
-  k = e = 0;
-  if (q + 1 < off.size()) {
-    k = off[q];
-    e = off[q + 1];
+  const std::uint32_t* before = pairs.before[r].data();
+  for (std::int64_t i = i0; i < i1; ++i) {
+    const std::size_t q = static_cast<std::size_t>(i - i0);
+    if (q + 1 < off.size())
+      f(i, before, off[q], off[q + 1], false);
+    else
+      f(i, before, 0, 0, false);
   }
+  const std::uint32_t* later = pairs.later[r].data();
+  for (std::int64_t i = i0; i < i1; ++i)
+    f(i, later, pairs.begin[i], pairs.begin[i] + pairs.count[i], true);
 }
 
 /// Summation density of the particles [i0, i1) (range r of the pair lists), several
@@ -190,16 +196,12 @@ inline void densityRange(std::int64_t i0, std::int64_t i1, std::size_t r, const 
     });
     return sum.lane0();
   };
-  for (std::int64_t i = i0; i < i1; ++i) {
-    const std::uint32_t* nb;
-    std::uint64_t k, e;
-    beforeRange(pairs, r, i0, i, nb, k, e);
-    density[i] = sums(i, nb, k, e, 0.0, false);
-  }
-  const std::uint32_t* later = pairs.later[r].data();
-  for (std::int64_t i = i0; i < i1; ++i)
-    density[i] = self + mass * sums(i, later, pairs.begin[i], pairs.begin[i] + pairs.count[i],
-                                    density[i], true);
+  forEachListOfRange(
+      pairs, r, i0, i1,
+      [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e, bool later) {
+        density[i] = later ? self + mass * sums(i, nb, k, e, density[i], true)
+                           : sums(i, nb, k, e, 0.0, false);
+      });
 }
 
 void densityRange2(std::int64_t i0, std::int64_t i1, std::size_t r, const Vec3* x,
@@ -353,15 +355,7 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
     if (in.add) acc += in.add[i];
     in.out[i] = acc;
   };
-  for (std::int64_t i = i0; i < i1; ++i) {
-    const std::uint32_t* nb;
-    std::uint64_t k, e;
-    beforeRange(pairs, r, i0, i, nb, k, e);
-    add(i, nb, k, e, false);
-  }
-  const std::uint32_t* later = pairs.later[r].data();
-  for (std::int64_t i = i0; i < i1; ++i)
-    add(i, later, pairs.begin[i], pairs.begin[i] + pairs.count[i], true);
+  forEachListOfRange(pairs, r, i0, i1, add);
 }
 
 template <bool kUniformNu>
