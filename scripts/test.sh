@@ -14,7 +14,10 @@ bash scripts/install-deps.sh --clients
 # again (depend mode: no preprocessor run on a miss).
 export CCACHE_DIR="$PWD/build/ccache" CCACHE_DEPEND=1
 launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-BUILD_DIR=build bash scripts/build.sh "${launcher[@]}"
+# Each test program compiled as one source (WAKE_UNITY_TESTS): the test sources' compile
+# time 240 s -> 137 s (the headers they share parsed once per program).
+unity=(-DWAKE_UNITY_TESTS=ON)
+BUILD_DIR=build bash scripts/build.sh "${launcher[@]}" "${unity[@]}"
 # One test per core, each on one thread: the physics tests and scene runs scale better
 # that way than one test at a time on every core (results are the same bits on any
 # number of threads).
@@ -29,7 +32,7 @@ if [ "${WAKE_SKIP_BULLET_DOUBLE:-0}" != 1 ]; then
   # Only what the tests below need: the installed targets and the Bullet test program.
   start=$SECONDS
   cmake -S . -B build-f64 -G Ninja -DCMAKE_BUILD_TYPE=Release -DWAKE_BULLET_DOUBLE=ON \
-    -DWAKE_BUILD_BENCH=OFF "${launcher[@]}" >/dev/null
+    -DWAKE_BUILD_BENCH=OFF "${launcher[@]}" "${unity[@]}" >/dev/null
   cmake --build build-f64 --parallel "$(nproc)" --target wake_installed wake_bullet_tests
   (cd build-f64 && ctest --output-on-failure -j 1 --timeout 1200 -L 'bullet|package')
   echo "[wake] double-precision Bullet build and tests: $((SECONDS - start)) s"
@@ -45,7 +48,7 @@ if [ "${WAKE_SKIP_SANITIZERS:-0}" != 1 ]; then
   # its tests 395 s instead of 347 s.
   BUILD_DIR=build-asan WAKE_BUILD_TARGETS="wake_sph_tests wake_geometry_tests wake_surface_tests wake_coupling_tests wake_bullet_tests wake_io_tests wake_render_tests" \
     bash scripts/build.sh -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O0 -g1 -DNDEBUG" \
-      -DWAKE_SIMULATION_FLAGS=-O1 -DWAKE_SANITIZE=ON -DWAKE_BUILD_BENCH=OFF
+      -DWAKE_SIMULATION_FLAGS=-O1 -DWAKE_SANITIZE=ON -DWAKE_BUILD_BENCH=OFF "${unity[@]}"
   (cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
      OMP_NUM_THREADS=1 ctest --output-on-failure -j "$(nproc)" --timeout 1200 -L sanitize)
 fi

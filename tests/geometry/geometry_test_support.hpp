@@ -5,6 +5,8 @@
 
 namespace wake::test {
 
+inline constexpr double kPi = 3.14159265358979323846;
+
 /// Total surface area of a sampling (m^2).
 inline double totalArea(const SurfaceSamples& s) {
   double sum = 0.0;

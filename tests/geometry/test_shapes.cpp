@@ -17,7 +17,7 @@ namespace {
 using test::rawGradient;
 using test::totalArea;
 
-constexpr double kPi = 3.14159265358979323846;
+using test::kPi;
 
 std::string dataPath(const std::string& name) {
   return std::string(WAKE_TEST_DATA_DIR) + "/" + name;

@@ -18,7 +18,7 @@
 namespace wake {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using test::kPi;
 
 struct Mesh {
   std::vector<Vec3> vertices;

@@ -37,7 +37,7 @@ using test::readFile;
 using test::runWake;
 using test::TempDir;
 
-const std::string kScenes = std::string(WAKE_TEST_DATA_DIR) + "/scenes/";
+using test::kScenes;
 
 std::string inQuotes(const fs::path& p) {
   return "\"" + p.string() + "\"";

@@ -34,7 +34,7 @@ using wake::test::readFile;
 using wake::test::runWake;
 using wake::test::TempDir;
 
-const std::string kScene = std::string(WAKE_TEST_DATA_DIR) + "/scenes/small_dambreak.json";
+const std::string kDambreakScene = std::string(WAKE_TEST_DATA_DIR) + "/scenes/small_dambreak.json";
 constexpr std::size_t kFrames = 6;  // round(end 0.05 s * 100 /s) + 1
 
 std::size_t lineCount(const std::string& s) {
@@ -72,7 +72,7 @@ class SmallDambreakRun : public ::testing::Test {
     // One thread: CTest runs a test per core, and OpenMP threads beyond the cores spin
     // against each other (a run of 0.6 s took 20 s beside another test).
     run_ = new CliResult(runWake(
-        "run \"" + kScene + "\" --out \"" + outDir().string() + "\" --threads 1", dir_->path));
+        "run \"" + kDambreakScene + "\" --out \"" + outDir().string() + "\" --threads 1", dir_->path));
   }
   static void TearDownTestSuite() {
     delete run_;
@@ -232,7 +232,7 @@ TEST_F(SmallDambreakRun, BadInputFailsAndLeavesEarlierOutputUntouched) {
     before[entry.path()] = readFile(entry.path());
 
   // A scene naming the same output file, with a misspelt field and a bad slip.
-  const json good = json::parse(readFile(kScene));
+  const json good = json::parse(readFile(kDambreakScene));
   struct Bad {
     std::function<void(json&)> edit;
     const char* field;
@@ -264,7 +264,7 @@ TEST_F(SmallDambreakRun, BadInputFailsAndLeavesEarlierOutputUntouched) {
 TEST(WakeCli, UnstableRunExitsOneNamingTheParticleAndKeepsTheFramesBefore) {
   // A speed of sound far too low: the fluid piles up beyond 3 x its rest density.
   const TempDir dir;
-  json scene = json::parse(readFile(kScene));
+  json scene = json::parse(readFile(kDambreakScene));
   scene["fluid"]["speed_of_sound"] = 0.05;
   scene["time"]["end"] = 1.0;
   const fs::path file = dir.path / "unstable.json";
@@ -325,10 +325,10 @@ TEST(WakeCli, BadCommandLinesExitTwoWithOneLine) {
     const char* says;
   } cases[] = {
       {"", "subcommand"},
-      {"run \"" + kScene + "\"", "--out"},
-      {"run \"" + kScene + "\"" + out + " --threads 0", "--threads"},
-      {"run \"" + kScene + "\"" + out + " --end -1", "--end"},
-      {"run \"" + kScene + "\"" + out + " --end nan", "--end"},
+      {"run \"" + kDambreakScene + "\"", "--out"},
+      {"run \"" + kDambreakScene + "\"" + out + " --threads 0", "--threads"},
+      {"run \"" + kDambreakScene + "\"" + out + " --end -1", "--end"},
+      {"run \"" + kDambreakScene + "\"" + out + " --end nan", "--end"},
       {"run no_such_scene.json" + out, "no_such_scene.json"},
       {"frobnicate", "frobnicate"},
   };
@@ -345,7 +345,7 @@ TEST(WakeCli, BadCommandLinesExitTwoWithOneLine) {
 TEST(WakeCli, EndOverrideQuietAndThreads) {
   const TempDir dir;
   const CliResult r = runWake(
-      "run \"" + kScene + "\" --out \"" + dir.path.string() + "\" --end 0.02 --quiet --threads 2",
+      "run \"" + kDambreakScene + "\" --out \"" + dir.path.string() + "\" --end 0.02 --quiet --threads 2",
       dir.path);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(r.err, "");
@@ -358,7 +358,7 @@ TEST(WakeCli, EndOverrideQuietAndThreads) {
 
 TEST(WakeCli, ResolutionRefinesTheFluidAndSeriesHasARowPerFrame) {
   const TempDir coarse, fine;
-  const std::string args = "run \"" + kScene + "\" --end 0.02 --quiet --out ";
+  const std::string args = "run \"" + kDambreakScene + "\" --end 0.02 --quiet --out ";
   ASSERT_EQ(runWake(args + "\"" + coarse.path.string() + "\"", coarse.path).status, 0);
   const CliResult r = runWake(args + "\"" + fine.path.string() + "\" --resolution 2", fine.path);
   ASSERT_EQ(r.status, 0) << r.err;
@@ -386,7 +386,7 @@ TEST(WakeCli, ResolutionRefinesTheFluidAndSeriesHasARowPerFrame) {
 TEST(WakeCli, BadResolutionExitsTwoNamingIt) {
   const TempDir dir;
   for (const char* value : {"0", "-1", "nan"}) {
-    const CliResult r = runWake("run \"" + kScene + "\" --out \"" + (dir.path / "out").string() +
+    const CliResult r = runWake("run \"" + kDambreakScene + "\" --out \"" + (dir.path / "out").string() +
                                     "\" --resolution " + value,
                                 dir.path);
     EXPECT_EQ(r.status, 2) << value << "\n" << r.err;

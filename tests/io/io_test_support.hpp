@@ -17,6 +17,9 @@
 
 namespace wake::test {
 
+/// The test scenes (tests/data/scenes/).
+inline const std::string kScenes = std::string(WAKE_TEST_DATA_DIR) + "/scenes/";
+
 inline std::string readFile(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   std::ostringstream s;

@@ -17,7 +17,7 @@ namespace {
 using json = nlohmann::json;
 namespace fs = std::filesystem;
 
-const std::string kScenes = std::string(WAKE_TEST_DATA_DIR) + "/scenes/";
+using test::kScenes;
 
 TEST(SceneLoader, DefaultsAreTheSettingsStructsOwn) {
   // One set of defaults: a scene that gives only what is required gets exactly what the

@@ -31,7 +31,7 @@ using wake::test::readFile;
 using wake::test::runWake;
 using wake::test::TempDir;
 
-const std::string kScene = std::string(WAKE_TEST_DATA_DIR) + "/scenes/small_float.json";
+const std::string kFloatScene = std::string(WAKE_TEST_DATA_DIR) + "/scenes/small_float.json";
 
 /// A binary little-endian PLY read back: its header's elements and properties, and the
 /// data as bytes.
@@ -67,7 +67,7 @@ class SurfaceRun : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new TempDir();
-    run_ = new CliResult(runWake("run \"" + kScene + "\" --out \"" + out().string() +
+    run_ = new CliResult(runWake("run \"" + kFloatScene + "\" --out \"" + out().string() +
                                      "\" --end 0.1 --threads 1 --surface --obj --quiet",
                                  dir_->path));
     export_ = new CliResult(runWake("export \"" + out().string() + "\" --quiet", dir_->path));
@@ -258,7 +258,7 @@ TEST_F(SurfaceRun, BadInputExitsTwoNamingIt) {
                        Bad{"surface " + dir + " --scene nope", "--scene"},
                        Bad{"surface \"" + dir_->path.string() + "\"", "no finished run"},
                        Bad{"export \"" + (dir_->path / "missing").string() + "\"", "not a folder"},
-                       Bad{"run \"" + kScene + "\" --out " + dir + " --surface --voxel-factor 9",
+                       Bad{"run \"" + kFloatScene + "\" --out " + dir + " --surface --voxel-factor 9",
                            "surface.voxel_factor"}}) {
     const std::string before = readFile(out() / "surface" / "surface.json");
     const CliResult r = runWake(b.args, dir_->path);

@@ -96,7 +96,7 @@ void expectMatchesBruteForce(std::vector<Vec3> x, const Aabb& domain, double r) 
   }
 }
 
-const Aabb kDomain{Vec3(-1, -1, -1), Vec3(1, 1, 1)};
+const Aabb kCube{Vec3(-1, -1, -1), Vec3(1, 1, 1)};
 
 }  // namespace
 
@@ -106,7 +106,7 @@ TEST(Neighbors, RandomPoints) {
   std::vector<Vec3> x(1500);
   for (Vec3& p : x)
     p = Vec3(u(rng), u(rng), u(rng));
-  expectMatchesBruteForce(x, kDomain, 0.15);
+  expectMatchesBruteForce(x, kCube, 0.15);
 }
 
 TEST(Neighbors, ClusteredPoints) {
@@ -116,7 +116,7 @@ TEST(Neighbors, ClusteredPoints) {
   for (const Vec3& c : {Vec3(0.5, 0.5, 0.5), Vec3(-0.3, 0.1, -0.7)})
     for (int i = 0; i < 600; ++i)
       x.push_back(c + Vec3(g(rng), g(rng), g(rng)));
-  expectMatchesBruteForce(x, kDomain, 0.05);
+  expectMatchesBruteForce(x, kCube, 0.05);
 }
 
 TEST(Neighbors, PointsOnCellBorders) {
@@ -127,17 +127,17 @@ TEST(Neighbors, PointsOnCellBorders) {
     for (int j = -4; j <= 4; ++j)
       x.push_back(Vec3(i * r, j * r, 0.0));
   x.push_back(Vec3(0.1, 0.1, 0.25));
-  expectMatchesBruteForce(x, kDomain, r);
+  expectMatchesBruteForce(x, kCube, r);
 }
 
 TEST(Neighbors, OutsideDomainIsClampedNotLost) {
   std::vector<Vec3> x = {Vec3(1.2, 0, 0), Vec3(0.98, 0, 0), Vec3(-1.0, -1.0, -1.0)};
-  expectMatchesBruteForce(x, kDomain, 0.3);
+  expectMatchesBruteForce(x, kCube, 0.3);
 }
 
 TEST(Neighbors, EmptyAndSingle) {
-  expectMatchesBruteForce({}, kDomain, 0.1);
-  expectMatchesBruteForce({Vec3(0.3, 0.2, 0.1)}, kDomain, 0.1);
+  expectMatchesBruteForce({}, kCube, 0.1);
+  expectMatchesBruteForce({Vec3(0.3, 0.2, 0.1)}, kCube, 0.1);
 }
 
 TEST(Neighbors, SameListsWithOneAndTwoThreads) {
@@ -146,7 +146,7 @@ TEST(Neighbors, SameListsWithOneAndTwoThreads) {
   std::vector<Vec3> x(3000);
   for (Vec3& p : x)
     p = Vec3(u(rng), u(rng), u(rng));
-  UniformGrid grid(kDomain, 0.12);
+  UniformGrid grid(kCube, 0.12);
   std::vector<std::uint32_t> order;
   grid.sort(x, order);
   std::vector<Vec3> sorted(x.size());
