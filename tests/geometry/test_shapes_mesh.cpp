@@ -1,4 +1,5 @@
 // Triangle meshes from memory (makeTriangleMesh): the BVH answers equal brute force.
+#include "geometry/geometry_test_support.hpp"
 #include "geometry/shape.hpp"
 
 #include <gtest/gtest.h>

@@ -1,6 +1,7 @@
 // Scene loader: the shipped test scenes load with the right values and defaults, and every
 // kind of bad input is refused with one line naming the file and the field.
 #include "io/scene.hpp"
+#include "io/io_test_support.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
