@@ -116,22 +116,23 @@ void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, do
     for (std::size_t i = out.range[r]; i < out.range[r + 1]; ++i) {
       const double xi = points[i][0], yi = points[i][1], zi = points[i][2];
       const std::size_t before = used;
-      grid.forEachNeighborRange(points[i], [&](std::uint32_t b, std::uint32_t e) {
-        if (b <= i) b = static_cast<std::uint32_t>(i + 1);  // the ranges ascend: j > i only
-        if (b >= e) return;
-        // Grown by a quarter (the buffer stays for the next steps: doubling left up to
-        // twice the lists' size unused).
-        if (local.size() < used + (e - b))
-          local.resize(used + (e - b) + std::max<std::size_t>(used / 4, 4096));
-        std::uint32_t* dst = local.data();
-        for (std::uint32_t j = b; j < e; ++j) {
-          const double dx = xi - points[j][0];
-          const double dy = yi - points[j][1];
-          const double dz = zi - points[j][2];
-          dst[used] = j;
-          used += static_cast<std::size_t>(dx * dx + dy * dy + dz * dz < radius_sq);
-        }
-      });
+      grid.forEachRangeInSphere(
+          points[i], grid.reach(), radius, true, [&](std::uint32_t b, std::uint32_t e) {
+            if (b <= i) b = static_cast<std::uint32_t>(i + 1);  // the ranges ascend: j > i only
+            if (b >= e) return;
+            // Grown by a quarter (the buffer stays for the next steps: doubling left up to
+            // twice the lists' size unused).
+            if (local.size() < used + (e - b))
+              local.resize(used + (e - b) + std::max<std::size_t>(used / 4, 4096));
+            std::uint32_t* dst = local.data();
+            for (std::uint32_t j = b; j < e; ++j) {
+              const double dx = xi - points[j][0];
+              const double dy = yi - points[j][1];
+              const double dz = zi - points[j][2];
+              dst[used] = j;
+              used += static_cast<std::size_t>(dx * dx + dy * dy + dz * dz < radius_sq);
+            }
+          });
       out.begin[i] = before;
       out.count[i] = static_cast<std::uint32_t>(used - before);
       if (used > before) span = std::max<std::size_t>(span, local[used - 1] - i);

@@ -7,6 +7,7 @@
 
 #include "sph/types.hpp"
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -64,6 +65,64 @@ class UniformGrid {
   template <class F>
   void forEachNeighborRange(const Vec3& p, F&& f) const {
     forEachRangeWithin(p, reach_, f);
+  }
+
+  /// As forEachRangeWithin(p, reach, f), without the cells that lie `radius` or farther
+  /// from p: rows the sphere misses are left out and each row's x-range is cut to the cells
+  /// it reaches. Every point within `radius` of p in those cells is still in a range, the
+  /// ranges in the same order (a loop that tests the distance sees the same points pass,
+  /// in the same order). The radius is taken a little larger (rounding in the cells' bounds);
+  /// a cell's gap to p is to its bounds nearest p (an outer cell's points clamped into it lie
+  /// farther, unless p's own cell, whose gap is 0). `from_own_row`: only p's row and the
+  /// rows after it (the points sorted after p's cell's start lie there: a search for the
+  /// later neighbours of a sorted point).
+  template <class F>
+  void forEachRangeInSphere(const Vec3& p, int reach, double radius, bool from_own_row,
+                            F&& f) const {
+    constexpr int kMaxReach = 4;
+    if (reach > kMaxReach) return forEachRangeWithin(p, reach, f);
+    // Squared gaps, in cells, from p to the cells at offsets -reach..reach along each axis.
+    double gap_sq[3][2 * kMaxReach + 1];
+    int c[3];
+    for (int k = 0; k < 3; ++k) {
+      const double u = (p[k] - origin_[k]) * inv_cell_;
+      const int v = static_cast<int>(std::floor(u));
+      c[k] = v < 0 ? 0 : (v >= dims_[k] ? dims_[k] - 1 : v);
+      const double frac = u - c[k];
+      gap_sq[k][reach] = 0.0;
+      for (int o = 1; o <= reach; ++o) {
+        const double below = frac + (o - 1), above = o - frac;
+        gap_sq[k][reach - o] = below * below;
+        gap_sq[k][reach + o] = above * above;
+      }
+    }
+    const double r = radius * inv_cell_ * (1.0 + 1e-9) + 1e-9;
+    const double r_sq = r * r;
+    const int x0 = c[0] - reach > 0 ? c[0] - reach : 0;
+    const int x1 = c[0] + reach < dims_[0] ? c[0] + reach : dims_[0] - 1;
+    const int z0 = from_own_row ? c[2] : (c[2] - reach > 0 ? c[2] - reach : 0);
+    const int z1 = c[2] + reach < dims_[2] ? c[2] + reach : dims_[2] - 1;
+    const int y0 = c[1] - reach > 0 ? c[1] - reach : 0;
+    const int y1 = c[1] + reach < dims_[1] ? c[1] + reach : dims_[1] - 1;
+    for (int z = z0; z <= z1; ++z) {
+      const double gz_sq = gap_sq[2][z - c[2] + reach];
+      if (gz_sq >= r_sq) continue;
+      for (int y = (from_own_row && z == c[2]) ? c[1] : y0; y <= y1; ++y) {
+        const double d_sq = gz_sq + gap_sq[1][y - c[1] + reach];
+        if (d_sq >= r_sq) continue;
+        int xa = c[0], xb = c[0];
+        for (int o = 1; o <= reach; ++o) {
+          xa -= gap_sq[0][reach - o] + d_sq < r_sq;
+          xb += gap_sq[0][reach + o] + d_sq < r_sq;
+        }
+        xa = xa > x0 ? xa : x0;
+        xb = xb < x1 ? xb : x1;
+        const std::uint32_t row = static_cast<std::uint32_t>((z * dims_[1] + y) * dims_[0]);
+        const std::uint32_t lo = cell_start_[row + xa];
+        const std::uint32_t hi = cell_start_[row + xb + 1];
+        if (lo < hi) f(lo, hi);
+      }
+    }
   }
 
   /// As forEachNeighborRange, with the cells within `reach` (>= 0) of p's cell.

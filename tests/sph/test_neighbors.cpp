@@ -165,3 +165,52 @@ TEST(Neighbors, RejectsHugeGrids) {
   EXPECT_THROW(UniformGrid(Aabb{Vec3(0, 0, 0), Vec3(1000, 1000, 1000)}, 0.01),
                std::invalid_argument);
 }
+
+TEST(Neighbors, SphereQueryFindsWhatTheWholeBlockFinds) {
+  // forEachRangeInSphere cuts the block of cells to those the sphere reaches: the points
+  // within the radius, found in its ranges, are those found in the whole block's, in the
+  // same order, from far fewer candidates. Points and queries partly outside the grid's
+  // box (clamped into its outer cells), on cell borders, with reach 1, 2 and 3.
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> u(-0.3, 1.3);
+  std::vector<Vec3> x(3000);
+  for (Vec3& p : x)
+    p = Vec3(u(rng), u(rng), u(rng));
+  for (int k = 0; k < 200; ++k)  // on the borders of cells of 0.1
+    x[k] = Vec3(0.1 * (k % 10), 0.1 * ((k / 10) % 10), 0.05 * (k % 7));
+  const Aabb box{Vec3::Zero(), Vec3::Ones()};
+  for (int reach : {1, 2, 3}) {
+    const double radius = 0.3;
+    UniformGrid grid(box, radius / reach, UniformGrid::kMaxCells, reach);
+    std::vector<std::uint32_t> order;
+    grid.sort(x, order);
+    std::vector<Vec3> sorted(x.size());
+    for (std::size_t k = 0; k < x.size(); ++k)
+      sorted[k] = x[order[k]];
+    std::size_t block_candidates = 0, sphere_candidates = 0;
+    for (std::size_t q = 0; q < sorted.size(); q += 3) {
+      const Vec3 p = q % 2 ? sorted[q] : Vec3(u(rng), u(rng), u(rng));
+      for (bool from_own_row : {false, true}) {
+        std::vector<std::uint32_t> block, sphere;
+        grid.forEachRangeWithin(p, reach, [&](std::uint32_t lo, std::uint32_t hi) {
+          for (std::uint32_t j = lo; j < hi; ++j) {
+            ++block_candidates;
+            if ((!from_own_row || j > q) && (p - sorted[j]).squaredNorm() < radius * radius)
+              block.push_back(j);
+          }
+        });
+        grid.forEachRangeInSphere(
+            p, reach, radius, from_own_row, [&](std::uint32_t lo, std::uint32_t hi) {
+              for (std::uint32_t j = lo; j < hi; ++j) {
+                ++sphere_candidates;
+                if ((!from_own_row || j > q) && (p - sorted[j]).squaredNorm() < radius * radius)
+                  sphere.push_back(j);
+              }
+            });
+        if (from_own_row && q % 2 == 0) continue;  // only a sorted point's own rows
+        ASSERT_EQ(sphere, block) << "reach " << reach << " query " << p.transpose();
+      }
+    }
+    EXPECT_LT(sphere_candidates, 0.8 * block_candidates) << "reach " << reach;
+  }
+}
