@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <functional>
 #include <random>
 #include <set>
@@ -211,6 +212,8 @@ TEST(Neighbors, SphereQueryFindsWhatTheWholeBlockFinds) {
         ASSERT_EQ(sphere, block) << "reach " << reach << " query " << p.transpose();
       }
     }
+    std::printf("[ sphere ] reach %d: %.2f of the block's candidates\n", reach,
+                double(sphere_candidates) / double(block_candidates));
     EXPECT_LT(sphere_candidates, 0.8 * block_candidates) << "reach " << reach;
   }
 }
