@@ -71,8 +71,9 @@ class SmallDambreakRun : public ::testing::Test {
     dir_ = new TempDir();
     // One thread: CTest runs a test per core, and OpenMP threads beyond the cores spin
     // against each other (a run of 0.6 s took 20 s beside another test).
-    run_ = new CliResult(runWake(
-        "run \"" + kDambreakScene + "\" --out \"" + outDir().string() + "\" --threads 1", dir_->path));
+    run_ = new CliResult(
+        runWake("run \"" + kDambreakScene + "\" --out \"" + outDir().string() + "\" --threads 1",
+                dir_->path));
   }
   static void TearDownTestSuite() {
     delete run_;
@@ -344,9 +345,9 @@ TEST(WakeCli, BadCommandLinesExitTwoWithOneLine) {
 
 TEST(WakeCli, EndOverrideQuietAndThreads) {
   const TempDir dir;
-  const CliResult r = runWake(
-      "run \"" + kDambreakScene + "\" --out \"" + dir.path.string() + "\" --end 0.02 --quiet --threads 2",
-      dir.path);
+  const CliResult r = runWake("run \"" + kDambreakScene + "\" --out \"" + dir.path.string() +
+                                  "\" --end 0.02 --quiet --threads 2",
+                              dir.path);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(r.err, "");
   EXPECT_EQ(r.out, "");
@@ -386,8 +387,8 @@ TEST(WakeCli, ResolutionRefinesTheFluidAndSeriesHasARowPerFrame) {
 TEST(WakeCli, BadResolutionExitsTwoNamingIt) {
   const TempDir dir;
   for (const char* value : {"0", "-1", "nan"}) {
-    const CliResult r = runWake("run \"" + kDambreakScene + "\" --out \"" + (dir.path / "out").string() +
-                                    "\" --resolution " + value,
+    const CliResult r = runWake("run \"" + kDambreakScene + "\" --out \"" +
+                                    (dir.path / "out").string() + "\" --resolution " + value,
                                 dir.path);
     EXPECT_EQ(r.status, 2) << value << "\n" << r.err;
     EXPECT_NE(r.err.find("--resolution"), std::string::npos) << r.err;

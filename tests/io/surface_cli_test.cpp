@@ -251,15 +251,16 @@ TEST_F(SurfaceRun, BadInputExitsTwoNamingIt) {
   struct Bad {
     std::string args, names;
   };
-  for (const Bad& b : {Bad{"surface " + dir + " --voxel-factor 5", "surface.voxel_factor"},
-                       Bad{"surface " + dir + " --radius-factor 0", "surface.radius_factor"},
-                       Bad{"surface " + dir + " --smoothing -1", "surface.smoothing"},
-                       Bad{"surface " + dir + " --adaptivity 2", "surface.adaptivity"},
-                       Bad{"surface " + dir + " --scene nope", "--scene"},
-                       Bad{"surface \"" + dir_->path.string() + "\"", "no finished run"},
-                       Bad{"export \"" + (dir_->path / "missing").string() + "\"", "not a folder"},
-                       Bad{"run \"" + kFloatScene + "\" --out " + dir + " --surface --voxel-factor 9",
-                           "surface.voxel_factor"}}) {
+  for (const Bad& b :
+       {Bad{"surface " + dir + " --voxel-factor 5", "surface.voxel_factor"},
+        Bad{"surface " + dir + " --radius-factor 0", "surface.radius_factor"},
+        Bad{"surface " + dir + " --smoothing -1", "surface.smoothing"},
+        Bad{"surface " + dir + " --adaptivity 2", "surface.adaptivity"},
+        Bad{"surface " + dir + " --scene nope", "--scene"},
+        Bad{"surface \"" + dir_->path.string() + "\"", "no finished run"},
+        Bad{"export \"" + (dir_->path / "missing").string() + "\"", "not a folder"},
+        Bad{"run \"" + kFloatScene + "\" --out " + dir + " --surface --voxel-factor 9",
+            "surface.voxel_factor"}}) {
     const std::string before = readFile(out() / "surface" / "surface.json");
     const CliResult r = runWake(b.args, dir_->path);
     EXPECT_EQ(r.status, 2) << b.args << ": " << r.err;
