@@ -39,19 +39,18 @@ void FluidState::resize(std::size_t n) {
 }
 
 void FluidState::permute(const std::vector<std::uint32_t>& order, FluidState& scratch) {
-  // Persistent fields move with their particle. acceleration, density and pressure are
-  // derived each step after the sort, so they are only resized.
-  gather(position, order, scratch.position);
-  gather(velocity, order, scratch.velocity);
+  // Persistent fields move with their particle, each gathered into the array of a field
+  // derived each step after the sort (acceleration, pressure), which takes the old one's
+  // storage in exchange: no second copy of the state is kept.
+  gather(position, order, acceleration);
+  position.swap(acceleration);
+  gather(velocity, order, acceleration);
+  velocity.swap(acceleration);
+  gather(kinematic_viscosity, order, pressure);
+  kinematic_viscosity.swap(pressure);
   gather(id, order, scratch.id);
-  gather(kinematic_viscosity, order, scratch.kinematic_viscosity);
-  position.swap(scratch.position);
-  velocity.swap(scratch.velocity);
   id.swap(scratch.id);
-  kinematic_viscosity.swap(scratch.kinematic_viscosity);
-  acceleration.resize(order.size());
   density.resize(order.size());
-  pressure.resize(order.size());
 }
 
 void FluidState::removeIf(const std::vector<std::uint8_t>& remove) {

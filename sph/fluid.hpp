@@ -71,8 +71,11 @@ struct FluidState {
 
   std::size_t size() const { return position.size(); }
   void resize(std::size_t n);
-  /// Applies `order` (new slot k takes old slot order[k]) to every per-particle array.
-  /// The one place that permutes particles: a new field must be added here.
+  /// Applies `order` (new slot k takes old slot order[k]) to the persistent per-particle
+  /// arrays (position, velocity, id, kinematic_viscosity). acceleration, density and
+  /// pressure, derived each step after the sort, serve as the gather space and are left
+  /// undefined (sized n). `scratch` lends its id array. The one place that permutes
+  /// particles: a new persistent field must be added here.
   void permute(const std::vector<std::uint32_t>& order, FluidState& scratch);
   /// Removes the particles whose `remove` flag is set, keeping the others' order.
   void removeIf(const std::vector<std::uint8_t>& remove);
