@@ -22,6 +22,26 @@ std::vector<std::set<std::uint32_t>> bruteForce(const std::vector<Vec3>& x, doub
   return out;
 }
 
+/// n points uniform in the cube [lo, hi]^3.
+std::vector<Vec3> randomPoints(std::size_t n, double lo, double hi, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(lo, hi);
+  std::vector<Vec3> x(n);
+  for (Vec3& p : x)
+    p = Vec3(u(rng), u(rng), u(rng));
+  return x;
+}
+
+/// Sorts `x` by the grid's cells: the sorted points, and in `order` the input index of each.
+std::vector<Vec3> sortedByCell(UniformGrid& grid, const std::vector<Vec3>& x,
+                               std::vector<std::uint32_t>& order) {
+  grid.sort(x, order);
+  std::vector<Vec3> sorted(x.size());
+  for (std::size_t k = 0; k < x.size(); ++k)
+    sorted[k] = x[order[k]];
+  return sorted;
+}
+
 /// Sorts the points by cell, builds lists, and compares with brute force on sorted points:
 /// with cells of the radius (reach 1) and of half of it (reach 2), on 1, 2, 3 and 7 threads
 /// (more threads than points included). Each list must ascend and be the same on any
@@ -30,11 +50,8 @@ void expectMatchesBruteForce(std::vector<Vec3> x, const Aabb& domain, double r) 
   for (int reach : {1, 2}) {
     UniformGrid grid(domain, r / reach, UniformGrid::kMaxCells, reach);
     std::vector<std::uint32_t> order;
-    grid.sort(x, order);
+    const std::vector<Vec3> sorted = sortedByCell(grid, x, order);
     ASSERT_EQ(order.size(), x.size());
-    std::vector<Vec3> sorted(x.size());
-    for (std::size_t k = 0; k < x.size(); ++k)
-      sorted[k] = x[order[k]];
     // order is a permutation
     std::vector<std::uint32_t> check = order;
     std::sort(check.begin(), check.end());
@@ -102,12 +119,7 @@ const Aabb kCube{Vec3(-1, -1, -1), Vec3(1, 1, 1)};
 }  // namespace
 
 TEST(Neighbors, RandomPoints) {
-  std::mt19937 rng(1);
-  std::uniform_real_distribution<double> u(-1, 1);
-  std::vector<Vec3> x(1500);
-  for (Vec3& p : x)
-    p = Vec3(u(rng), u(rng), u(rng));
-  expectMatchesBruteForce(x, kCube, 0.15);
+  expectMatchesBruteForce(randomPoints(1500, -1, 1, 1), kCube, 0.15);
 }
 
 TEST(Neighbors, ClusteredPoints) {
@@ -142,17 +154,9 @@ TEST(Neighbors, EmptyAndSingle) {
 }
 
 TEST(Neighbors, SameListsWithOneAndTwoThreads) {
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<double> u(-1, 1);
-  std::vector<Vec3> x(3000);
-  for (Vec3& p : x)
-    p = Vec3(u(rng), u(rng), u(rng));
   UniformGrid grid(kCube, 0.12);
   std::vector<std::uint32_t> order;
-  grid.sort(x, order);
-  std::vector<Vec3> sorted(x.size());
-  for (std::size_t k = 0; k < x.size(); ++k)
-    sorted[k] = x[order[k]];
+  const std::vector<Vec3> sorted = sortedByCell(grid, randomPoints(3000, -1, 1, 3), order);
   NeighborList one, two;
   omp_set_num_threads(1);
   buildNeighborList(grid, sorted, 0.12, one);
@@ -172,11 +176,8 @@ TEST(Neighbors, SphereQueryFindsWhatTheWholeBlockFinds) {
   // within the radius, found in its ranges, are those found in the whole block's, in the
   // same order, from far fewer candidates. Points and queries partly outside the grid's
   // box (clamped into its outer cells), on cell borders, with reach 1, 2 and 3.
-  std::mt19937 rng(21);
-  std::uniform_real_distribution<double> u(-0.3, 1.3);
-  std::vector<Vec3> x(3000);
-  for (Vec3& p : x)
-    p = Vec3(u(rng), u(rng), u(rng));
+  std::vector<Vec3> x = randomPoints(3000, -0.3, 1.3, 21);
+  const std::vector<Vec3> queries = randomPoints(3000, -0.3, 1.3, 22);
   for (int k = 0; k < 200; ++k)  // on the borders of cells of 0.1
     x[k] = Vec3(0.1 * (k % 10), 0.1 * ((k / 10) % 10), 0.05 * (k % 7));
   const Aabb box{Vec3::Zero(), Vec3::Ones()};
@@ -184,30 +185,26 @@ TEST(Neighbors, SphereQueryFindsWhatTheWholeBlockFinds) {
     const double radius = 0.3;
     UniformGrid grid(box, radius / reach, UniformGrid::kMaxCells, reach);
     std::vector<std::uint32_t> order;
-    grid.sort(x, order);
-    std::vector<Vec3> sorted(x.size());
-    for (std::size_t k = 0; k < x.size(); ++k)
-      sorted[k] = x[order[k]];
+    const std::vector<Vec3> sorted = sortedByCell(grid, x, order);
     std::size_t block_candidates = 0, sphere_candidates = 0;
     for (std::size_t q = 0; q < sorted.size(); q += 3) {
-      const Vec3 p = q % 2 ? sorted[q] : Vec3(u(rng), u(rng), u(rng));
+      const Vec3 p = q % 2 ? sorted[q] : queries[q];
       for (bool from_own_row : {false, true}) {
+        // The points within the radius (after q with from_own_row) among a visit's ranges.
+        auto collect = [&](std::vector<std::uint32_t>* found, std::size_t* candidates) {
+          return [&p, &sorted, found, candidates, from_own_row, q, radius](std::uint32_t lo,
+                                                                           std::uint32_t hi) {
+            for (std::uint32_t j = lo; j < hi; ++j) {
+              ++*candidates;
+              if ((!from_own_row || j > q) && (p - sorted[j]).squaredNorm() < radius * radius)
+                found->push_back(j);
+            }
+          };
+        };
         std::vector<std::uint32_t> block, sphere;
-        grid.forEachRangeWithin(p, reach, [&](std::uint32_t lo, std::uint32_t hi) {
-          for (std::uint32_t j = lo; j < hi; ++j) {
-            ++block_candidates;
-            if ((!from_own_row || j > q) && (p - sorted[j]).squaredNorm() < radius * radius)
-              block.push_back(j);
-          }
-        });
-        grid.forEachRangeInSphere(
-            p, reach, radius, from_own_row, [&](std::uint32_t lo, std::uint32_t hi) {
-              for (std::uint32_t j = lo; j < hi; ++j) {
-                ++sphere_candidates;
-                if ((!from_own_row || j > q) && (p - sorted[j]).squaredNorm() < radius * radius)
-                  sphere.push_back(j);
-              }
-            });
+        grid.forEachRangeWithin(p, reach, collect(&block, &block_candidates));
+        grid.forEachRangeInSphere(p, reach, radius, from_own_row,
+                                  collect(&sphere, &sphere_candidates));
         if (from_own_row && q % 2 == 0) continue;  // only a sorted point's own rows
         ASSERT_EQ(sphere, block) << "reach " << reach << " query " << p.transpose();
       }
