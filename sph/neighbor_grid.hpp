@@ -83,12 +83,9 @@ class UniformGrid {
     if (reach > kMaxReach) return forEachRangeWithin(p, reach, f);
     // Squared gaps, in cells, from p to the cells at offsets -reach..reach along each axis.
     double gap_sq[3][2 * kMaxReach + 1];
-    int c[3];
+    const Eigen::Vector3i c = cellCoord(p);
     for (int k = 0; k < 3; ++k) {
-      const double u = (p[k] - origin_[k]) * inv_cell_;
-      const int v = static_cast<int>(std::floor(u));
-      c[k] = v < 0 ? 0 : (v >= dims_[k] ? dims_[k] - 1 : v);
-      const double frac = u - c[k];
+      const double frac = (p[k] - origin_[k]) * inv_cell_ - c[k];
       gap_sq[k][reach] = 0.0;
       for (int o = 1; o <= reach; ++o) {
         const double below = frac + (o - 1), above = o - frac;
@@ -98,12 +95,9 @@ class UniformGrid {
     }
     const double r = radius * inv_cell_ * (1.0 + 1e-9) + 1e-9;
     const double r_sq = r * r;
-    const int x0 = c[0] - reach > 0 ? c[0] - reach : 0;
-    const int x1 = c[0] + reach < dims_[0] ? c[0] + reach : dims_[0] - 1;
-    const int z0 = from_own_row ? c[2] : (c[2] - reach > 0 ? c[2] - reach : 0);
-    const int z1 = c[2] + reach < dims_[2] ? c[2] + reach : dims_[2] - 1;
-    const int y0 = c[1] - reach > 0 ? c[1] - reach : 0;
-    const int y1 = c[1] + reach < dims_[1] ? c[1] + reach : dims_[1] - 1;
+    const int x0 = firstCell(c[0], reach), x1 = lastCell(0, c[0], reach);
+    const int y0 = firstCell(c[1], reach), y1 = lastCell(1, c[1], reach);
+    const int z0 = from_own_row ? c[2] : firstCell(c[2], reach), z1 = lastCell(2, c[2], reach);
     for (int z = z0; z <= z1; ++z) {
       const double gz_sq = gap_sq[2][z - c[2] + reach];
       if (gz_sq >= r_sq) continue;
@@ -115,12 +109,7 @@ class UniformGrid {
           xa -= gap_sq[0][reach - o] + d_sq < r_sq;
           xb += gap_sq[0][reach + o] + d_sq < r_sq;
         }
-        xa = xa > x0 ? xa : x0;
-        xb = xb < x1 ? xb : x1;
-        const std::uint32_t row = static_cast<std::uint32_t>((z * dims_[1] + y) * dims_[0]);
-        const std::uint32_t lo = cell_start_[row + xa];
-        const std::uint32_t hi = cell_start_[row + xb + 1];
-        if (lo < hi) f(lo, hi);
+        visitRow(y, z, xa > x0 ? xa : x0, xb < x1 ? xb : x1, f);
       }
     }
   }
@@ -129,23 +118,29 @@ class UniformGrid {
   template <class F>
   void forEachRangeWithin(const Vec3& p, int reach, F&& f) const {
     const Eigen::Vector3i c = cellCoord(p);
-    const int x0 = c[0] - reach > 0 ? c[0] - reach : 0;
-    const int x1 = c[0] + reach < dims_[0] ? c[0] + reach : dims_[0] - 1;
-    const int z0 = c[2] - reach > 0 ? c[2] - reach : 0;
-    const int z1 = c[2] + reach < dims_[2] ? c[2] + reach : dims_[2] - 1;
-    const int y0 = c[1] - reach > 0 ? c[1] - reach : 0;
-    const int y1 = c[1] + reach < dims_[1] ? c[1] + reach : dims_[1] - 1;
-    for (int z = z0; z <= z1; ++z) {
-      for (int y = y0; y <= y1; ++y) {
-        const std::uint32_t row = static_cast<std::uint32_t>((z * dims_[1] + y) * dims_[0]);
-        const std::uint32_t lo = cell_start_[row + x0];
-        const std::uint32_t hi = cell_start_[row + x1 + 1];
-        if (lo < hi) f(lo, hi);
-      }
-    }
+    const int x0 = firstCell(c[0], reach), x1 = lastCell(0, c[0], reach);
+    const int y0 = firstCell(c[1], reach), y1 = lastCell(1, c[1], reach);
+    const int z0 = firstCell(c[2], reach), z1 = lastCell(2, c[2], reach);
+    for (int z = z0; z <= z1; ++z)
+      for (int y = y0; y <= y1; ++y)
+        visitRow(y, z, x0, x1, f);
   }
 
  private:
+  /// The first and last of the cells c - reach .. c + reach along axis k in the grid.
+  static int firstCell(int c, int reach) { return c - reach > 0 ? c - reach : 0; }
+  int lastCell(int k, int c, int reach) const {
+    return c + reach < dims_[k] ? c + reach : dims_[k] - 1;
+  }
+  /// f(lo, hi) with the sorted points of cells xa..xb of row (y, z), when it has any.
+  template <class F>
+  void visitRow(int y, int z, int xa, int xb, F& f) const {
+    const std::uint32_t row = static_cast<std::uint32_t>((z * dims_[1] + y) * dims_[0]);
+    const std::uint32_t lo = cell_start_[row + xa];
+    const std::uint32_t hi = cell_start_[row + xb + 1];
+    if (lo < hi) f(lo, hi);
+  }
+
   Vec3 origin_ = Vec3::Zero();
   double cell_size_ = 1.0, inv_cell_ = 1.0;
   int reach_ = 1;
