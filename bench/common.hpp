@@ -20,12 +20,13 @@ struct Options {
   std::vector<int> threads = {1, 2};
   std::string scene;  ///< wake_bench_dambreak: a scene file to run instead of the synthetic one
   bool particles_given = false;
+  bool dfsph = false;  ///< --solver dfsph: the divergence-free solver instead of WCSPH
 };
 
 [[noreturn]] inline void usage(const char* program, const char* msg) {
   std::fprintf(stderr,
                "error: %s\nusage: %s [--particles N] [--steps S] [--warmup W] [--threads 1,2]"
-               " [--bodies B] [--scene FILE]\n",
+               " [--bodies B] [--scene FILE] [--solver wcsph|dfsph]\n",
                msg, program);
   std::exit(2);
 }
@@ -46,7 +47,11 @@ inline Options parse(int argc, char** argv) {
       o.steps = std::stoi(value("--steps"));
     else if (!std::strcmp(argv[i], "--warmup"))
       o.warmup = std::stoi(value("--warmup"));
-    else if (!std::strcmp(argv[i], "--bodies"))
+    else if (!std::strcmp(argv[i], "--solver")) {
+      const std::string s = value("--solver");
+      if (s != "wcsph" && s != "dfsph") usage(argv[0], "--solver must be wcsph or dfsph");
+      o.dfsph = s == "dfsph";
+    } else if (!std::strcmp(argv[i], "--bodies"))
       o.bodies = std::stoi(value("--bodies"));
     else if (!std::strcmp(argv[i], "--threads")) {
       o.threads.clear();

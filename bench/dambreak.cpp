@@ -4,7 +4,7 @@
 // resident memory of the process per fluid particle.
 //
 //   wake_bench_dambreak [--particles N] [--steps S] [--warmup W] [--threads 1,2]
-//                       [--scene FILE]
+//                       [--scene FILE] [--solver wcsph|dfsph]
 //
 // Without --scene: a synthetic column (nx x 2nx x nx particles of radius 5 mm) at one end
 // of a tank four columns long. With --scene: that scene file (its static bodies through
@@ -60,10 +60,13 @@ struct Bench {
 Bench make(const Options& opt) {
   Bench b;
   if (opt.scene.empty()) {
-    b.own = std::make_unique<Simulation>(damBreak(opt.particles));
+    SimulationSettings s = damBreak(opt.particles);
+    if (opt.dfsph) s.solver = FluidSolver::Dfsph;
+    b.own = std::make_unique<Simulation>(s);
     return b;
   }
   SceneFile scene = loadScene(opt.scene);
+  if (opt.dfsph) scene.sim.solver = FluidSolver::Dfsph;
   if (opt.particles_given)
     overrideResolution(scene, std::cbrt(double(opt.particles) / estimateFluidParticles(scene.sim)));
   b.world = std::make_unique<SceneWorld>(scene.sim, scene.bodies);
@@ -99,6 +102,8 @@ int main(int argc, char** argv) {
     for (int i = 0; i < opt.warmup; ++i)
       sim.step(1e9);
     const StepTimings before = sim.timings();
+    const std::uint64_t iterations0 = sim.densityIterations();
+    const std::uint64_t divergence0 = sim.divergenceIterations();
     const auto t0 = std::chrono::steady_clock::now();
     for (int i = 0; i < opt.steps; ++i)
       sim.step(1e9);
@@ -113,6 +118,15 @@ int main(int argc, char** argv) {
                 100 * t.neighbors / total, 100 * t.density / total, 100 * t.forces / total,
                 100 * t.boundary / total, 100 * t.integration / total, sim.time(),
                 static_cast<unsigned long long>(stateHash(sim)));
+    if (opt.dfsph) {
+      const double it = double(sim.densityIterations() - iterations0) / opt.steps;
+      const double itv = double(sim.divergenceIterations() - divergence0) / opt.steps;
+      std::printf(
+          "# dfsph: %.2f density + %.2f divergence iterations per step, %.1f ns per "
+          "particle per iteration (solver time / iterations)\n",
+          it, itv,
+          1e9 * t.forces / opt.steps / double(sim.fluidParticles()) / std::max(it + itv, 1.0));
+    }
     if (threads == 1)
       single = per_step;
     else if (single > 0)

@@ -186,6 +186,24 @@ class Boundaries {
                        const SamplePressure& pressure, std::vector<Vec3>& extra,
                        std::vector<Wrench>& reaction) const;
 
+  /// The walls' and bodies' terms of the divergence-free solver (sph/dfsph.hpp), from this
+  /// step's pairs (addWallTerms) with the bodies at `at`:
+  /// - `gradient` (n, kg/m^4): G_a = rho0 sum_k V_k grad_a W_ak, world;
+  /// - `flux` (n, kg/(m^3 s)): B_a = rho0 sum_k V_k v_k . grad_a W_ak, v_k the sample's
+  ///   velocity (its body's at `at`; zero for static bodies);
+  /// - `neighbors` (n): the samples within the kernel support.
+  void solverTerms(const Fluid& fluid, const BodyPlacement& at, const WallPairs& pairs,
+                   std::vector<Vec3>& gradient, std::vector<double>& flux,
+                   std::vector<std::uint32_t>& neighbors) const;
+  /// The solver's pressure force on each two-way body: particle a's impulse s_a (the sum of
+  /// its solves' pressure terms, m^5/(kg s)) pushes the body's samples k with
+  /// m s_a rho0 V_k grad_a W_ak / dt (the opposite of the walls' share of its velocity
+  /// change over the step). Adds the force and its torque about the centre of mass to
+  /// `reaction`, summed in fixed particle chunks: the same bits on any number of threads.
+  void addSolverReaction(const Fluid& fluid, const BodyPlacement& at, const WallPairs& pairs,
+                         const std::vector<double>& impulse, double dt,
+                         std::vector<Wrench>& reaction) const;
+
   /// Most bodies one fluid particle is in contact with at once (the nearest are kept).
   static constexpr std::size_t kMaxContacts = 8;
   /// Contacts of a fluid centre x with every body whose exact surface is closer than the
@@ -299,6 +317,13 @@ class Boundaries {
   /// p (set space), and its moment sum_k x_k x (...) when asked (two-way bodies).
   Vec3 pressureSum(const SampleSet& set, const std::vector<double>& p_rho2, const Vec3& p,
                    double pr2, const std::uint32_t* near, std::size_t count, Vec3* moment) const;
+  /// sum_k V_k grad W_ak over the `count` samples `near` of one set at p (set space); adds
+  /// sum_k V_k (u + omega x x_k) . grad W_ak to `flux` and sum_k x_k x V_k grad W_ak to
+  /// `moment` when they are given.
+  /// `within` (may be null) counts the samples within the support.
+  Vec3 gradientSum(const SampleSet& set, const Vec3& p, const std::uint32_t* near,
+                   std::size_t count, const Vec3& u, const Vec3& omega, double* flux, Vec3* moment,
+                   std::uint32_t* within = nullptr) const;
   /// The sample lists of `pairs` (sample -> particles) from its particle lists.
   void transposePairs(WallPairs& pairs) const;
   void samplePressure(const Fluid& fluid, const SampleSet& set, const Mat3& rotation,

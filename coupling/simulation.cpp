@@ -24,6 +24,15 @@ bool finite(const Vec3& v) {
   return v.allFinite();
 }
 
+/// Average over the particles of max(0, rho / rho0 - 1), summed in particle order.
+double averageCompression(const std::vector<double>& density, double rho0) {
+  if (density.empty()) return 0.0;
+  double sum = 0.0;
+  for (const double rho : density)
+    sum += std::max(0.0, rho / rho0 - 1.0);
+  return sum / double(density.size());
+}
+
 void require(bool ok, const std::string& field, const std::string& what) {
   if (!ok) throw std::invalid_argument(field + ": " + what);
 }
@@ -60,6 +69,17 @@ void validate(const SimulationSettings& s) {
   require(f.smoothing_ratio >= 0.8 && f.smoothing_ratio <= 2.0, "fluid.smoothing_ratio",
           "must be in [0.8, 2]");
   require(s.cfl > 0 && s.cfl <= 1, "time.cfl", "must be in (0, 1]");
+  if (s.solver == FluidSolver::Dfsph) {
+    require(s.cfl <= 0.6, "time.cfl", "must be in (0, 0.6] with fluid.solver \"dfsph\"");
+    const DfsphParams& d = s.dfsph;
+    require(d.max_density_error > 0 && d.max_density_error <= 0.1, "fluid.dfsph.max_density_error",
+            "must be in (0, 0.1]");
+    require(d.max_divergence_error > 0 && d.max_divergence_error <= 1,
+            "fluid.dfsph.max_divergence_error", "must be in (0, 1]");
+    require(d.max_iterations >= 2, "fluid.dfsph.max_iterations", "must be >= 2");
+    require(d.max_divergence_iterations >= 0, "fluid.dfsph.max_divergence_iterations",
+            "must be >= 0");
+  }
   require(std::isfinite(s.max_dt) && s.max_dt > 0, "time.max_dt", "must be > 0");
   for (std::size_t i = 0; i < s.blocks.size(); ++i) {
     const FluidBlock& b = s.blocks[i];
@@ -164,6 +184,7 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
   require(rigid_->count() == s.bodies.size(), "bodies",
           "the rigid-body integrator has a different number of bodies");
   fluid_ = std::make_unique<Fluid>(s.fluid, s.domain, &data_.fluid);
+  if (s.solver == FluidSolver::Dfsph) dfsph_ = std::make_unique<DivergenceFreeSolver>(s.dfsph);
   boundaries_ = std::make_unique<Boundaries>(s.fluid, s.domain);
   for (const BodySettings& b : s.bodies)
     boundaries_->addBody(b);
@@ -241,7 +262,12 @@ void Simulation::fail(const FluidHealth& health) {
   m << "step " << data_.run.steps << " (t = " << data_.run.time << " s): fluid particle "
     << st.id[i] << " at (" << x.x() << ", " << x.y() << ", " << x.z() << ") m has "
     << describeProblem(health, st, f.rest_density);
-  if (health.problem == FluidHealth::Problem::DensityRatio) {
+  if (health.problem == FluidHealth::Problem::DensityRatio && dfsph_) {
+    m << ", above health.max_density_ratio = " << model_.health.max_density_ratio
+      << ": the pressure solve did not hold the fluid at its rest density; lower time.cfl (now "
+      << model_.cfl << ") or time.max_dt (now " << model_.max_dt
+      << " s), or raise fluid.dfsph.max_iterations (now " << model_.dfsph.max_iterations << ")";
+  } else if (health.problem == FluidHealth::Problem::DensityRatio) {
     m << ", above health.max_density_ratio = " << model_.health.max_density_ratio
       << ": the fluid is compressed far more than a weakly compressible fluid may be; raise "
          "fluid.speed_of_sound (now "
@@ -280,8 +306,10 @@ double Simulation::chooseDt(double t_limit) const {
     v_max = std::max(
         v_max, s.linear_velocity.norm() + s.angular_velocity.norm() * boundaries_->bodyExtent(b));
   }
-  const double dt = stableTimeStep(model_.fluid, model_.cfl, model_.max_dt, v_max,
-                                   fluid_->maxAcceleration(), nu_max_);
+  const double dt = dfsph_ ? incompressibleTimeStep(model_.fluid, model_.cfl, model_.max_dt, v_max,
+                                                    fluid_->maxAcceleration(), nu_max_)
+                           : stableTimeStep(model_.fluid, model_.cfl, model_.max_dt, v_max,
+                                            fluid_->maxAcceleration(), nu_max_);
   const double remaining = t_limit - data_.run.time;
   // Land exactly on t_limit, and never leave a sliver step behind.
   if (remaining <= dt) return remaining;
@@ -328,16 +356,33 @@ void Simulation::computeFluidForces() {
   boundaries_->addWallTerms(*fluid_, work_.placed, st.density, work_.wall_shear,
                             work_.wall_reaction, work_.wall_pairs);
   timings_.boundary += secondsSince(t0);
-  t0 = Clock::now();
-  fluid_->computePressure();
-  timings_.density += secondsSince(t0);
-  t0 = Clock::now();
-  // The walls' pressure force: the samples at the fluid's pressure there.
-  boundaries_->computeSamplePressure(*fluid_, work_.placed, model_.gravity, work_.wall_pairs,
-                                     work_.sample_pressure);
-  boundaries_->addWallPressure(*fluid_, work_.placed, work_.wall_pairs, work_.sample_pressure,
-                               work_.wall_shear, work_.wall_reaction);
-  timings_.boundary += secondsSince(t0);
+  data_.run.density_error_sum += averageCompression(st.density, model_.fluid.rest_density);
+  if (dfsph_) {
+    // The pressure is the solver's: the velocities at the step's start made free of
+    // compression here, the predicted ones held at the rest density in predict().
+    t0 = Clock::now();
+    boundaries_->solverTerms(*fluid_, work_.placed, work_.wall_pairs, work_.boundary_gradient,
+                             work_.boundary_flux, work_.boundary_neighbors);
+    timings_.boundary += secondsSince(t0);
+    t0 = Clock::now();
+    dfsph_->prepare(*fluid_, work_.boundary_gradient, work_.boundary_neighbors);
+    const double last_dt = data_.run.last_dt > 0 ? data_.run.last_dt : model_.max_dt;
+    data_.run.divergence_iterations +=
+        dfsph_->solveDivergence(*fluid_, work_.boundary_flux, last_dt);
+    fluid_->computeWithoutPressure();
+    timings_.forces += secondsSince(t0);
+  } else {
+    t0 = Clock::now();
+    fluid_->computePressure();
+    timings_.density += secondsSince(t0);
+    t0 = Clock::now();
+    // The walls' pressure force: the samples at the fluid's pressure there.
+    boundaries_->computeSamplePressure(*fluid_, work_.placed, model_.gravity, work_.wall_pairs,
+                                       work_.sample_pressure);
+    boundaries_->addWallPressure(*fluid_, work_.placed, work_.wall_pairs, work_.sample_pressure,
+                                 work_.wall_shear, work_.wall_reaction);
+    timings_.boundary += secondsSince(t0);
+  }
 
   t0 = Clock::now();
   fluid_->computeAccelerations(model_.gravity, work_.wall_shear);
@@ -366,6 +411,18 @@ void Simulation::predict(double dt) {
   auto t0 = Clock::now();
   fluid_->predict(dt, work_.x_pred, work_.v_old);
   timings_.integration += secondsSince(t0);
+  if (dfsph_) {
+    // The pressure that brings v* to the rest density at the step's end, its push on the
+    // two-way bodies, and x* from the new v*.
+    t0 = Clock::now();
+    data_.run.solver_iterations += dfsph_->solveDensity(*fluid_, work_.boundary_flux, dt);
+    fluid_->predictPositions(dt, work_.x_pred);
+    timings_.forces += secondsSince(t0);
+    t0 = Clock::now();
+    boundaries_->addSolverReaction(*fluid_, work_.placed, work_.wall_pairs, dfsph_->impulse(), dt,
+                                   work_.wall_reaction);
+    timings_.boundary += secondsSince(t0);
+  }
   t0 = Clock::now();
   rigid_->predict(dt, work_.body_pred);
   timings_.rigid += secondsSince(t0);
@@ -501,7 +558,7 @@ void Simulation::startDensities(FluidSnapshot& out) const {
   probe.updateNeighbors();
   probe.computeFluidDensity();
   boundaries_->addDensity(probe, placement(), copy.density);
-  probe.computePressure();
+  if (!dfsph_) probe.computePressure();  // the solver's pressure is found by a step
   std::vector<std::uint32_t> rank_of_id;
   for (std::size_t k = 0; k < out.id.size(); ++k) {
     const std::uint32_t id = out.id[k];

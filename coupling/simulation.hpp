@@ -12,6 +12,7 @@
 #include "coupling/position_correction.hpp"
 #include "coupling/rigid_body.hpp"
 #include "geometry/shape.hpp"
+#include "sph/dfsph.hpp"
 #include "sph/fluid.hpp"
 #include "sph/health.hpp"
 
@@ -42,14 +43,21 @@ struct HealthLimits {
   double max_density_ratio = 3.0;
 };
 
+/// The fluid's pressure: weakly compressible (Tait's equation of state, the paper's fluid;
+/// the time step bound by the speed of sound) or incompressible (the divergence-free
+/// solver, sph/dfsph.hpp; the time step bound by the flow's speed only).
+enum class FluidSolver { Wcsph, Dfsph };
+
 /// How the fluid is modelled and stepped: one set of settings (and defaults) for the scene
 /// loader, CoupledWorld and the benchmarks. SimulationSettings adds the scene's content.
 struct SolverSettings {
   FluidParams fluid;  ///< speed_of_sound <= 0 means "auto"
+  FluidSolver solver = FluidSolver::Wcsph;
+  DfsphParams dfsph;  ///< solver Dfsph only
   CouplingMethod method = CouplingMethod::Local;
   /// m^2/s^2, D of the penalty baseline (method Penalty); 0 = defaultPenaltyStrength(c).
   double penalty_strength = 0.0;
-  double cfl = 0.4;      ///< lambda of the CFL condition, in (0, 1]
+  double cfl = 0.4;      ///< lambda of the CFL condition, in (0, 1]; (0, 0.6] with Dfsph
   double max_dt = 1e-3;  ///< s, upper bound of the time step, > 0
   Aabb domain;           ///< m; particles leaving it are lost; empty = automatic
   HealthLimits health;
@@ -114,6 +122,11 @@ struct RunCounters {
   std::uint64_t last_contacts = 0;  ///< particle-body contacts in the last step
   double max_density_ratio = 0;     ///< largest density / rest density after a step
   double window_density_ratio = 0;  ///< the same since the last resetWindow()
+  /// Sum over the steps of the average compression max(0, rho / rho0 - 1) of the fluid's
+  /// particles at the step's start (their summed densities).
+  double density_error_sum = 0;
+  std::uint64_t solver_iterations = 0;      ///< Dfsph: density solve iterations, all steps
+  std::uint64_t divergence_iterations = 0;  ///< Dfsph: divergence solve iterations, all steps
 };
 
 /// Everything of a run that changes from step to step (what a checkpoint holds): with a
@@ -219,6 +232,17 @@ class Simulation {
     data_.run.window_penetrating = 0;
   }
   double lastDt() const { return data_.run.last_dt; }
+  /// Average over the steps of the fluid's average compression max(0, rho / rho0 - 1) at
+  /// each step's start (0 before the first step).
+  double averageDensityError() const {
+    return data_.run.steps ? data_.run.density_error_sum / double(data_.run.steps) : 0.0;
+  }
+  /// Iterations of the divergence-free solver's density and divergence solves over all
+  /// steps (solver Dfsph; 0 otherwise).
+  std::uint64_t densityIterations() const { return data_.run.solver_iterations; }
+  std::uint64_t divergenceIterations() const { return data_.run.divergence_iterations; }
+  /// The divergence-free solver's iterations and errors in the last step (solver Dfsph).
+  const DfsphStats* solverStats() const { return dfsph_ ? &dfsph_->stats() : nullptr; }
 
   /// The run's changing state (checkpoints). Throws std::logic_error when the rigid-body
   /// integrator cannot be saved.
@@ -273,20 +297,24 @@ class Simulation {
   std::unique_ptr<Boundaries> boundaries_;
   std::unique_ptr<RigidBodies> rigid_;
   DirectForcing forcing_;
-  std::unique_ptr<PenaltyBoundary> penalty_;  // method Penalty only
+  std::unique_ptr<PenaltyBoundary> penalty_;     // method Penalty only
+  std::unique_ptr<DivergenceFreeSolver> dfsph_;  // solver Dfsph only
   double nu_max_ = 0;  // m^2/s, largest kinematic viscosity of the fluid (set at start)
   StepTimings timings_;
   /// Scratch space of the step, reused every step (no state: nothing in it outlives one).
   struct Workspace {
-    std::vector<Vec3> x_pred;                      // (n) predicted positions x*
-    std::vector<Vec3> v_old;                       // (n) velocities at the step's start
-    std::vector<std::uint8_t> flags;               // (n) in contact / to remove
-    std::vector<RigidState> body_now, body_final;  // (bodies) states at t and t + dt
-    std::vector<RigidPrediction> body_pred;        // (bodies) predicted states
-    std::vector<Vec3> wall_shear;                  // (n) the walls' viscous shear, m/s^2
-    std::vector<Wrench> wall_reaction;             // (bodies) its reaction on two-way bodies
-    SamplePressure sample_pressure;                // the boundary samples' pressure
-    WallPairs wall_pairs;                          // the step's (particle, sample) pairs
+    std::vector<Vec3> x_pred;                       // (n) predicted positions x*
+    std::vector<Vec3> v_old;                        // (n) velocities at the step's start
+    std::vector<std::uint8_t> flags;                // (n) in contact / to remove
+    std::vector<RigidState> body_now, body_final;   // (bodies) states at t and t + dt
+    std::vector<RigidPrediction> body_pred;         // (bodies) predicted states
+    std::vector<Vec3> wall_shear;                   // (n) the walls' viscous shear, m/s^2
+    std::vector<Wrench> wall_reaction;              // (bodies) its reaction on two-way bodies
+    SamplePressure sample_pressure;                 // the boundary samples' pressure
+    WallPairs wall_pairs;                           // the step's (particle, sample) pairs
+    std::vector<Vec3> boundary_gradient;            // (n) Dfsph: the walls' G_a
+    std::vector<double> boundary_flux;              // (n) Dfsph: the walls' B_a
+    std::vector<std::uint32_t> boundary_neighbors;  // (n) Dfsph: samples within the support
     BodyPlacement placed;  // the bodies placed for the current stage (now, predicted, final)
   } work_;
   std::optional<HealthError> failure_;  // the error that stopped the run

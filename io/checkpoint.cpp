@@ -70,6 +70,9 @@ void writeCheckpoint(const std::string& path, const SimulationState& s,
     w.writeAttribute(group, "max_penetrating", run.max_penetrating);
     w.writeAttribute(group, "window_penetrating", run.window_penetrating);
     w.writeAttribute(group, "last_contacts", run.last_contacts);
+    w.writeAttribute(group, "density_error_sum", run.density_error_sum);
+    w.writeAttribute(group, "solver_iterations", run.solver_iterations);
+    w.writeAttribute(group, "divergence_iterations", run.divergence_iterations);
     const FluidState& f = s.fluid;
     const hsize_t n = f.size();
     w.writeDataset(group, "position", H5T_NATIVE_DOUBLE, f.position.data(), n, 3);
@@ -139,6 +142,9 @@ SimulationState readCheckpoint(const std::string& path, CheckpointInfo* info) {
   run.max_penetrating = u64("max_penetrating");
   run.window_penetrating = u64("window_penetrating");
   run.last_contacts = u64("last_contacts");
+  run.density_error_sum = f64("density_error_sum");
+  run.solver_iterations = u64("solver_iterations");
+  run.divergence_iterations = u64("divergence_iterations");
   auto vec3s = [&](const char* name) {
     const std::vector<double> flat = r.readDataset<double>(group, name, H5T_NATIVE_DOUBLE, 3);
     std::vector<Vec3> out(flat.size() / 3);

@@ -294,9 +294,39 @@ void readHealth(const ObjectReader& health, SimulationSettings& sim) {
       "max_density_ratio", kDefaults.health.max_density_ratio, Range{1.0, kInf, true, false});
 }
 
+/// A whole number in `range` (an iteration count).
+int wholeNumber(const ObjectReader& object, const char* key, int fallback, const Range& range) {
+  const double v = object.number(key, fallback, range);
+  if (v != std::floor(v))
+    object.at(key).fail("must be a whole number (got " + formatNumber(v) + ")");
+  return static_cast<int>(v);
+}
+
+void readSolver(const ObjectReader& fluid, SimulationSettings& sim) {
+  const std::string solver = fluid.choice("solver", "wcsph", {"wcsph", "dfsph"});
+  sim.solver = solver == "dfsph" ? FluidSolver::Dfsph : FluidSolver::Wcsph;
+  const std::optional<ObjectReader> dfsph = fluid.optionalObject("dfsph");
+  if (!dfsph) return;
+  if (sim.solver != FluidSolver::Dfsph)
+    dfsph->where().fail("is only used with \"solver\": \"dfsph\" (solver is \"" + solver + "\")");
+  dfsph->allowOnly(
+      {"max_density_error", "max_divergence_error", "max_iterations", "max_divergence_iterations"});
+  DfsphParams& d = sim.dfsph;
+  const DfsphParams defaults = kDefaults.dfsph;
+  d.max_density_error =
+      dfsph->number("max_density_error", defaults.max_density_error, Range{0.0, 0.1, true, false});
+  d.max_divergence_error = dfsph->number("max_divergence_error", defaults.max_divergence_error,
+                                         Range{0.0, 1.0, true, false});
+  d.max_iterations =
+      wholeNumber(*dfsph, "max_iterations", defaults.max_iterations, Range{2.0, 1e6, false, false});
+  d.max_divergence_iterations =
+      wholeNumber(*dfsph, "max_divergence_iterations", defaults.max_divergence_iterations,
+                  Range{0.0, 1e6, false, false});
+}
+
 void readFluid(const ObjectReader& fluid, SimulationSettings& sim) {
   fluid.allowOnly({"particle_radius", "rest_density", "speed_of_sound", "viscosity",
-                   "kinematic_viscosity", "smoothing_ratio", "blocks"});
+                   "kinematic_viscosity", "smoothing_ratio", "solver", "dfsph", "blocks"});
   FluidParams& p = sim.fluid;
   p.particle_radius = fluid.number("particle_radius", kPositive);
   const FluidParams defaults = kDefaults.fluid;
@@ -313,6 +343,7 @@ void readFluid(const ObjectReader& fluid, SimulationSettings& sim) {
       fluid.number("kinematic_viscosity", defaults.kinematic_viscosity, kViscosityRange);
   p.smoothing_ratio =
       fluid.number("smoothing_ratio", defaults.smoothing_ratio, Range{0.8, 2.0, false, false});
+  readSolver(fluid, sim);
 
   const Where blocks_at = fluid.at("blocks");
   const json& blocks = requireArray(blocks_at, fluid.require("blocks"));
@@ -614,6 +645,9 @@ SceneFile parseScene(const std::string& json_text, const std::string& path) {
   scene.sim.gravity = root.vec3("gravity", kDefaults.gravity);
   readTime(root.object("time"), scene);
   readFluid(root.object("fluid"), scene.sim);
+  if (scene.sim.solver == FluidSolver::Dfsph && scene.sim.cfl > 0.6)
+    root.at("time").key("cfl").fail("must be in (0, 0.6] with fluid.solver \"dfsph\" (got " +
+                                    formatNumber(scene.sim.cfl) + ")");
   checkParticleCount(root.at("fluid").key("particle_radius"), scene.sim);
   if (const auto coupling = root.optionalObject("coupling")) readCoupling(*coupling, scene.sim);
   if (const auto health = root.optionalObject("health")) readHealth(*health, scene.sim);

@@ -3,6 +3,7 @@
 #include "io/files.hpp"
 #include "io/scene.hpp"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace wake {
@@ -50,6 +51,15 @@ nlohmann::ordered_json makeSummary(const SceneFile& scene, const Simulation& sim
   j["method"] = sim.settings().method == CouplingMethod::Global    ? "global"
                 : sim.settings().method == CouplingMethod::Penalty ? "penalty"
                                                                    : "local";
+  const bool dfsph = sim.settings().solver == FluidSolver::Dfsph;
+  j["solver"] = dfsph ? "dfsph" : "wcsph";
+  // Average over the steps of the fluid's average compression max(0, rho / rho0 - 1).
+  j["avg_density_error"] = sim.averageDensityError();
+  if (dfsph) {
+    const double steps = std::max<double>(1.0, static_cast<double>(sim.steps()));
+    j["density_iterations_per_step"] = static_cast<double>(sim.densityIterations()) / steps;
+    j["divergence_iterations_per_step"] = static_cast<double>(sim.divergenceIterations()) / steps;
+  }
   j["end_time"] = scene.end_time;  // s
   j["frames"] = stats.frames;
   j["threads"] = stats.threads;

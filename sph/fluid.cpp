@@ -1,5 +1,7 @@
 #include "sph/fluid.hpp"
 
+#include "sph/pair_loops.hpp"
+
 #include <omp.h>
 
 #include <algorithm>
@@ -40,17 +42,18 @@ void FluidState::resize(std::size_t n) {
 
 void FluidState::permute(const std::vector<std::uint32_t>& order, FluidState& scratch) {
   // Persistent fields move with their particle, each gathered into the array of a field
-  // derived each step after the sort (acceleration, pressure), which takes the old one's
+  // derived each step after the sort (acceleration, density), which takes the old one's
   // storage in exchange: no second copy of the state is kept.
   gather(position, order, acceleration);
   position.swap(acceleration);
   gather(velocity, order, acceleration);
   velocity.swap(acceleration);
-  gather(kinematic_viscosity, order, pressure);
-  kinematic_viscosity.swap(pressure);
+  gather(kinematic_viscosity, order, density);
+  kinematic_viscosity.swap(density);
+  gather(pressure, order, density);
+  pressure.swap(density);
   gather(id, order, scratch.id);
   id.swap(scratch.id);
-  density.resize(order.size());
 }
 
 void FluidState::removeIf(const std::vector<std::uint8_t>& remove) {
@@ -128,37 +131,6 @@ inline void forEachNeighborGroup(const std::uint32_t* nb, std::uint64_t k, std::
     const std::uint32_t j[2] = {nb[k], nb[both ? k + 1 : k]};
     group(Lanes2::all(0.0), j, both ? 2 : 1);
   }
-}
-
-/// Calls f(lo, hi, r) for each range r = [lo, hi) of the pair lists, in parallel: the
-/// ranges of the symmetric pair loops below (each writes only its own points).
-template <class F>
-void forEachRange(const PairLists& pairs, F&& f) {
-  const std::int64_t ranges = static_cast<std::int64_t>(pairs.ranges());
-#pragma omp parallel for schedule(static, 1)
-  for (std::int64_t r = 0; r < ranges; ++r)
-    f(static_cast<std::int64_t>(pairs.range[r]), static_cast<std::int64_t>(pairs.range[r + 1]),
-      static_cast<std::size_t>(r));
-}
-
-/// The two passes of a symmetric pair loop over range r = [i0, i1) of the pair lists:
-/// f(i, nb, k, e, false) with each point's earlier neighbours before i0, nb[k .. e)
-/// (maybe none), then f(i, nb, k, e, true) with its later neighbours, point after point.
-template <class F>
-inline void forEachListOfRange(const PairLists& pairs, std::size_t r, std::int64_t i0,
-                               std::int64_t i1, F&& f) {
-  const std::vector<std::uint32_t>& off = pairs.before_offset[r];
-  const std::uint32_t* before = pairs.before[r].data();
-  for (std::int64_t i = i0; i < i1; ++i) {
-    const std::size_t q = static_cast<std::size_t>(i - i0);
-    if (q + 1 < off.size())
-      f(i, before, off[q], off[q + 1], false);
-    else
-      f(i, before, 0, 0, false);
-  }
-  const std::uint32_t* later = pairs.later[r].data();
-  for (std::int64_t i = i0; i < i1; ++i)
-    f(i, later, pairs.begin[i], pairs.begin[i] + pairs.count[i], true);
 }
 
 /// Summation density of the particles [i0, i1) (range r of the pair lists), several
@@ -244,6 +216,15 @@ void Fluid::computePressure() {
     inv_rho_[i] = inv_rho;
     p_over_rho_sq_[i] = p * inv_rho * inv_rho;
   }
+}
+
+void Fluid::computeWithoutPressure() {
+  const std::int64_t n = static_cast<std::int64_t>(state_.size());
+  p_over_rho_sq_.assign(state_.size(), 0.0);
+  inv_rho_.resize(state_.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i)
+    inv_rho_[i] = 1.0 / state_.density[i];
 }
 
 namespace {
@@ -445,6 +426,15 @@ void Fluid::predict(double dt, std::vector<Vec3>& x_pred, std::vector<Vec3>& v_o
     st.velocity[i] += dt * st.acceleration[i];
     x_pred[i] = st.position[i] + dt * st.velocity[i];
   }
+}
+
+void Fluid::predictPositions(double dt, std::vector<Vec3>& x_pred) const {
+  const FluidState& st = state_;
+  const std::int64_t n = static_cast<std::int64_t>(st.size());
+  x_pred.resize(st.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i)
+    x_pred[i] = st.position[i] + dt * st.velocity[i];
 }
 
 void Fluid::integratePositions(double dt) {

@@ -72,10 +72,11 @@ struct FluidState {
   std::size_t size() const { return position.size(); }
   void resize(std::size_t n);
   /// Applies `order` (new slot k takes old slot order[k]) to the persistent per-particle
-  /// arrays (position, velocity, id, kinematic_viscosity). acceleration, density and
-  /// pressure, derived each step after the sort, serve as the gather space and are left
-  /// undefined (sized n). `scratch` lends its id array. The one place that permutes
-  /// particles: a new persistent field must be added here.
+  /// arrays (position, velocity, id, kinematic_viscosity, and pressure: the pressure
+  /// solver starts from the last step's). acceleration and density, derived each step
+  /// after the sort, serve as the gather space and are left undefined (sized n). `scratch`
+  /// lends its id array. The one place that permutes particles: a new persistent field
+  /// must be added here.
   void permute(const std::vector<std::uint32_t>& order, FluidState& scratch);
   /// Removes the particles whose `remove` flag is set, keeping the others' order.
   void removeIf(const std::vector<std::uint8_t>& remove);
@@ -111,6 +112,10 @@ class Fluid {
   void computeFluidDensity();
   /// Tait pressure from density, clamped at zero (no tensile pull at free surfaces).
   void computePressure();
+  /// What computeAccelerations needs of the densities when a pressure solver
+  /// (DivergenceFreeSolver) makes the pressure force instead: 1 / rho, and no pressure term
+  /// in the accelerations. The state's pressure is left as it is.
+  void computeWithoutPressure();
   /// Pressure + artificial viscosity + physical viscosity + gravity accelerations, plus
   /// `extra` (n, m/s^2; e.g. the walls' viscous shear) when it is not empty.
   ///
@@ -126,6 +131,8 @@ class Fluid {
   /// The step's prediction with every force but the boundaries' control:
   /// v* = v + dt a (in the state), x* = x + dt v* (into x_pred); v_old keeps v.
   void predict(double dt, std::vector<Vec3>& x_pred, std::vector<Vec3>& v_old);
+  /// x* = x + dt v (into x_pred) with the velocities as they are now.
+  void predictPositions(double dt, std::vector<Vec3>& x_pred) const;
   /// x += dt v: the step's integration with the final velocities.
   void integratePositions(double dt);
 

@@ -1,0 +1,119 @@
+// The walls' and bodies' part of the divergence-free solver (Boundaries, coupling/boundary.hpp;
+// sph/dfsph.hpp): the samples' share of each particle's density gradient and of its rate of
+// change of density, and the solver's pressure force on two-way bodies.
+#include "coupling/boundary.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace wake {
+
+Vec3 Boundaries::gradientSum(const SampleSet& set, const Vec3& p, const std::uint32_t* near,
+                             std::size_t count, const Vec3& u, const Vec3& omega, double* flux,
+                             Vec3* moment, std::uint32_t* within) const {
+  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
+  Vec3 sum = Vec3::Zero();
+  for (std::size_t t = 0; t < count; ++t) {
+    const std::uint32_t k = near[t];
+    const Vec3 d = p - set.position[k];
+    const double d_sq = d.squaredNorm();
+    if (d_sq >= support_sq) continue;
+    const Vec3 g = (set.volume[k] * kernel_.derivativeOverR(std::sqrt(d_sq))) * d;
+    sum += g;
+    if (within) ++*within;
+    if (flux) *flux += (u + omega.cross(set.position[k])).dot(g);
+    if (moment) *moment += set.position[k].cross(g);
+  }
+  return sum;
+}
+
+void Boundaries::solverTerms(const Fluid& fluid, const BodyPlacement& at, const WallPairs& pairs,
+                             std::vector<Vec3>& gradient, std::vector<double>& flux,
+                             std::vector<std::uint32_t>& neighbors) const {
+  const FluidState& st = fluid.state();
+  const std::size_t n = st.size();
+  if (pairs.particles != n) throw std::logic_error("Boundaries::solverTerms before addWallTerms");
+  gradient.assign(n, Vec3::Zero());
+  flux.assign(n, 0.0);
+  neighbors.assign(n, 0u);
+  const double rho0 = fluid_.rest_density;
+  const std::size_t chunks = (n + kChunk - 1) / kChunk;
+  const Vec3 zero = Vec3::Zero();
+#pragma omp parallel for schedule(static)
+  for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
+    const std::size_t end = std::min(n, (c + 1) * kChunk);
+    for (std::size_t i = c * kChunk; i < end; ++i) {
+      const Vec3 xi = st.position[i];
+      Vec3 g = Vec3::Zero();
+      double b = 0.0;
+      std::uint32_t within = 0;
+      pairs.forEachSegment(
+          i, c, c * kChunk, [&](std::uint32_t set, const std::uint32_t* near, std::uint32_t count) {
+            if (set == 0) {
+              g += gradientSum(static_, xi, near, count, zero, zero, nullptr, nullptr, &within);
+              return;
+            }
+            const MovingBody& m = moving_[set - 1];
+            const BodyFrame& f = at[m.body];
+            const Mat3 rt = f.rotation.transpose();
+            const Vec3 p = rt * (xi - f.pose.position);
+            // The samples' velocity in the set's frame: v_c + omega x x_k, both turned.
+            g += f.rotation * gradientSum(m.samples, p, near, count, rt * f.linear_velocity,
+                                          rt * f.angular_velocity, &b, nullptr, &within);
+          });
+      gradient[i] = rho0 * g;
+      flux[i] = rho0 * b;
+      neighbors[i] = within;
+    }
+  }
+}
+
+void Boundaries::addSolverReaction(const Fluid& fluid, const BodyPlacement& at,
+                                   const WallPairs& pairs, const std::vector<double>& impulse,
+                                   double dt, std::vector<Wrench>& reaction) const {
+  const FluidState& st = fluid.state();
+  const std::size_t n = st.size(), nb = bodies_.size();
+  if (n == 0 || nb == 0) return;
+  if (pairs.particles != n || impulse.size() != n)
+    throw std::logic_error("Boundaries::addSolverReaction before addWallTerms or the solve");
+  bool two_way = false;
+  for (const MovingBody& m : moving_)
+    two_way = two_way || bodies_[m.body].settings.twoWay();
+  if (!two_way) return;
+  const double scale = 2.0 * fluid.particleMass() * fluid_.rest_density / dt;
+  const std::size_t chunks = (n + kChunk - 1) / kChunk;
+  chunk_reaction_.assign(chunks * nb, Wrench{});
+  const Vec3 zero = Vec3::Zero();
+#pragma omp parallel for schedule(static)
+  for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
+    const std::size_t end = std::min(n, (c + 1) * kChunk);
+    for (std::size_t i = c * kChunk; i < end; ++i) {
+      if (impulse[i] == 0.0) continue;
+      const Vec3 xi = st.position[i];
+      pairs.forEachSegment(
+          i, c, c * kChunk, [&](std::uint32_t set, const std::uint32_t* near, std::uint32_t count) {
+            if (set == 0) return;
+            const MovingBody& m = moving_[set - 1];
+            if (!bodies_[m.body].settings.twoWay()) return;
+            const BodyFrame& f = at[m.body];
+            const Vec3 p = f.rotation.transpose() * (xi - f.pose.position);
+            Vec3 moment = Vec3::Zero();
+            const Vec3 g = gradientSum(m.samples, p, near, count, zero, zero, nullptr, &moment);
+            const double coefficient = scale * impulse[i];
+            Wrench& w = chunk_reaction_[c * nb + m.body];
+            w.force += coefficient * (f.rotation * g);
+            w.torque += coefficient * (f.rotation * moment);
+          });
+    }
+  }
+  for (std::size_t c = 0; c < chunks; ++c)
+    for (std::size_t b = 0; b < nb; ++b) {
+      reaction[b].force += chunk_reaction_[c * nb + b].force;
+      reaction[b].torque += chunk_reaction_[c * nb + b].torque;
+    }
+}
+
+}  // namespace wake

@@ -1,0 +1,115 @@
+// An incompressible pressure solver for the fluid: Divergence-Free SPH (Bender & Koschier,
+// SCA 2015 / TVCG 2017), with the boundary's share of the density (DESIGN.md §5b). Two
+// Jacobi-style solves per step, each a pressure impulse that changes velocities only:
+// - the divergence solve makes the velocity field at the step's start free of compression
+//   (d rho / dt <= 0);
+// - the density solve makes the predicted velocities v* (every non-pressure force in them)
+//   carry each particle to the rest density at the step's end: rho + dt d rho / dt <= rho0.
+//
+// With g_ab = m grad_a W_ab (a fluid pair), the boundary's G_a = sum_k rho0 V_k grad_a W_ak
+// and B_a = sum_k rho0 V_k v_k . grad_a W_ak (the samples k of the walls and bodies, moving at
+// v_k), the rate of change of particle a's density is
+//   D_a = sum_b (v_a - v_b) . g_ab + v_a . G_a - B_a.
+// A pressure term s (= dt p / rho^2, m^5 / (kg s)) changes velocities by
+//   dv_a = -sum_b (s_a + s_b) g_ab - s_a G_a
+// (the symmetric SPH pressure force over one step; the walls mirror the particle's own
+// pressure), and s_a alone changes D_a by -s_a / a_a, with the factor
+//   a_a = 1 / (|sum_b g_ab + G_a|^2 + sum_b |g_ab|^2).
+// Each iteration raises s_a by what removes particle a's own compression (never lowers it:
+// no pull) and applies all of them at once. The density solve starts from half the last
+// step's pressure where the fluid is compressed (warm start, as SPlisHSPlasH does), so a
+// column at rest needs few iterations and a pressure no longer needed fades.
+//
+// The walls' and bodies' side of the impulse (s_a G_a) is the fluid's pressure force on them:
+// impulse() gives it per particle for the coupling (Boundaries::addSolverReaction).
+//
+// Sums run over the pair lists in the order of each particle's whole neighbour list, and the
+// error norms in fixed chunks: the same bits on any number of threads.
+#pragma once
+
+#include "sph/fluid.hpp"
+
+#include <cstdint>
+#include <vector>
+
+namespace wake {
+
+/// The divergence-free solver's settings (the scene's fluid.dfsph).
+struct DfsphParams {
+  /// Average compression max(0, rho* / rho0 - 1) over the particles (and expansion where a
+  /// particle still has pressure) at which the density solve stops, in (0, 0.1].
+  double max_density_error = 5e-4;
+  /// Average compression rate dt max(0, d rho / dt) / rho0 (over the particles with
+  /// enough neighbours for a rate: not splashes) at which the divergence solve stops, in
+  /// (0, 1].
+  double max_divergence_error = 1e-3;
+  int max_iterations = 100;             ///< density solve, >= 2 (it runs at least 2)
+  int max_divergence_iterations = 100;  ///< divergence solve, >= 0 (0: no divergence solve)
+};
+
+/// Iterations and errors of one step's solves.
+struct DfsphStats {
+  int density_iterations = 0;
+  int divergence_iterations = 0;
+  double density_error = 0;     ///< the density solve's last average error (fraction)
+  double divergence_error = 0;  ///< the divergence solve's last average error (fraction)
+};
+
+class DivergenceFreeSolver {
+ public:
+  explicit DivergenceFreeSolver(const DfsphParams& params) : params_(params) {}
+
+  const DfsphParams& params() const { return params_; }
+
+  /// After the neighbour lists and the densities (with the boundary's share) of this step:
+  /// each pair's mass-weighted kernel gradient g_ab and each particle's factor a_a.
+  /// `boundary_gradient` (n): G_a (kg/m^4), and `boundary_neighbors` (n): the wall samples
+  /// within the support of each particle; both may be empty (no boundary).
+  void prepare(const Fluid& fluid, const std::vector<Vec3>& boundary_gradient,
+               const std::vector<std::uint32_t>& boundary_neighbors);
+
+  /// The divergence solve on the fluid's velocities. `boundary_flux` (n or empty): B_a
+  /// (kg/(m^3 s)); `dt` (s) only scales the error measure (the step's size is not yet
+  /// known: the last one). Returns the iterations taken.
+  int solveDivergence(Fluid& fluid, const std::vector<double>& boundary_flux, double dt);
+
+  /// The density solve on the predicted velocities v* (the fluid's velocities) for a step
+  /// of `dt`, starting from the state's pressure (the last step's); writes the pressure it
+  /// found, p = rho^2 s / dt, to the state. Returns the iterations taken.
+  int solveDensity(Fluid& fluid, const std::vector<double>& boundary_flux, double dt);
+
+  /// (n) The sum of s over this step's solves (prepare() clears it): the walls' and
+  /// bodies' share of particle a's velocity change was -impulse[a] G_a.
+  const std::vector<double>& impulse() const { return impulse_; }
+
+  const DfsphStats& stats() const { return stats_; }
+
+ private:
+  /// Pair sums over the lists with the stored gradients: term(i, j, g, own, other) adds
+  /// i's term to own and j's to *other (null when j's sum is not this range's to write).
+  template <class T, class Term>
+  void pairSums(const PairLists& pairs, const T& zero, std::vector<T>& sum, Term&& term) const;
+  /// D_a (rate of change of density) of every particle into rate_.
+  void densityRates(const Fluid& fluid, const std::vector<double>& boundary_flux);
+  /// Applies the increments ds_ (s per particle) to the velocities and to impulse_.
+  void applyImpulse(Fluid& fluid);
+  /// sum over i of f(i), in fixed chunks (the same bits on any number of threads).
+  template <class F>
+  static double chunkedSum(std::size_t n, F&& f);
+
+  DfsphParams params_;
+  DfsphStats stats_;
+  /// Per range of the pair lists: g_ab (3 floats per pair) in the order of the later and
+  /// the before lists.
+  std::vector<std::vector<float>> later_grad_, before_grad_;
+  const std::vector<Vec3>* boundary_gradient_ = nullptr;
+  std::vector<double> factor_;        ///< (n) a_a (m^8 / kg^2)
+  std::vector<std::uint8_t> sparse_;  ///< (n) too few neighbours for the divergence solve
+  std::vector<double> rate_;          ///< (n) D_a
+  std::vector<double> s_;             ///< (n) this solve's s so far
+  std::vector<double> ds_;            ///< (n) this iteration's increment of s
+  std::vector<Vec3> dv_;              ///< (n) velocity change of the pair terms
+  std::vector<double> impulse_;       ///< (n) sum of s over the step's solves
+};
+
+}  // namespace wake
