@@ -356,7 +356,9 @@ void Simulation::computeFluidForces() {
   boundaries_->addWallTerms(*fluid_, work_.placed, st.density, work_.wall_shear,
                             work_.wall_reaction, work_.wall_pairs);
   timings_.boundary += secondsSince(t0);
-  data_.run.density_error_sum += averageCompression(st.density, model_.fluid.rest_density);
+  const double compression = averageCompression(st.density, model_.fluid.rest_density);
+  data_.run.density_error_sum += compression;
+  data_.run.max_step_density_error = std::max(data_.run.max_step_density_error, compression);
   if (dfsph_) {
     // The pressure is the solver's: the velocities at the step's start made free of
     // compression here, the predicted ones held at the rest density in predict().

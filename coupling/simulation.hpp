@@ -125,6 +125,7 @@ struct RunCounters {
   /// Sum over the steps of the average compression max(0, rho / rho0 - 1) of the fluid's
   /// particles at the step's start (their summed densities).
   double density_error_sum = 0;
+  double max_step_density_error = 0;        ///< the largest of those steps' averages
   std::uint64_t solver_iterations = 0;      ///< Dfsph: density solve iterations, all steps
   std::uint64_t divergence_iterations = 0;  ///< Dfsph: divergence solve iterations, all steps
 };
@@ -241,6 +242,8 @@ class Simulation {
   /// steps (solver Dfsph; 0 otherwise).
   std::uint64_t densityIterations() const { return data_.run.solver_iterations; }
   std::uint64_t divergenceIterations() const { return data_.run.divergence_iterations; }
+  /// The largest average compression of one step (as averageDensityError()).
+  double maxStepDensityError() const { return data_.run.max_step_density_error; }
   /// The divergence-free solver's iterations and errors in the last step (solver Dfsph).
   const DfsphStats* solverStats() const { return dfsph_ ? &dfsph_->stats() : nullptr; }
 

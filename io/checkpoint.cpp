@@ -71,6 +71,7 @@ void writeCheckpoint(const std::string& path, const SimulationState& s,
     w.writeAttribute(group, "window_penetrating", run.window_penetrating);
     w.writeAttribute(group, "last_contacts", run.last_contacts);
     w.writeAttribute(group, "density_error_sum", run.density_error_sum);
+    w.writeAttribute(group, "max_step_density_error", run.max_step_density_error);
     w.writeAttribute(group, "solver_iterations", run.solver_iterations);
     w.writeAttribute(group, "divergence_iterations", run.divergence_iterations);
     const FluidState& f = s.fluid;
@@ -143,6 +144,7 @@ SimulationState readCheckpoint(const std::string& path, CheckpointInfo* info) {
   run.window_penetrating = u64("window_penetrating");
   run.last_contacts = u64("last_contacts");
   run.density_error_sum = f64("density_error_sum");
+  run.max_step_density_error = f64("max_step_density_error");
   run.solver_iterations = u64("solver_iterations");
   run.divergence_iterations = u64("divergence_iterations");
   auto vec3s = [&](const char* name) {

@@ -55,6 +55,7 @@ nlohmann::ordered_json makeSummary(const SceneFile& scene, const Simulation& sim
   j["solver"] = dfsph ? "dfsph" : "wcsph";
   // Average over the steps of the fluid's average compression max(0, rho / rho0 - 1).
   j["avg_density_error"] = sim.averageDensityError();
+  j["max_step_density_error"] = sim.maxStepDensityError();  // the worst step's average
   if (dfsph) {
     const double steps = std::max<double>(1.0, static_cast<double>(sim.steps()));
     j["density_iterations_per_step"] = static_cast<double>(sim.densityIterations()) / steps;

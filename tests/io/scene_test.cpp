@@ -42,6 +42,23 @@ TEST(SceneLoader, DefaultsAreTheSettingsStructsOwn) {
       "fluid": {"particle_radius": 0.01, "blocks": [{"min": [0, 0, 0], "max": [1, 1, 1]}]}})",
                                  "limit.json");
   EXPECT_EQ(h.sim.health.max_density_ratio, 1.5);
+  EXPECT_EQ(s.sim.solver, d.solver);
+  EXPECT_EQ(s.sim.solver, FluidSolver::Wcsph);
+}
+
+TEST(SceneLoader, DivergenceFreeSolverAndItsSettings) {
+  const SceneFile s = parseScene(R"({"time": {"end": 1, "cfl": 0.6},
+      "fluid": {"particle_radius": 0.01, "solver": "dfsph",
+                "dfsph": {"max_density_error": 0.0002, "max_divergence_iterations": 0},
+                "blocks": [{"min": [0, 0, 0], "max": [1, 1, 1]}]}})",
+                                 "dfsph.json");
+  const DfsphParams d;
+  EXPECT_EQ(s.sim.solver, FluidSolver::Dfsph);
+  EXPECT_EQ(s.sim.dfsph.max_density_error, 0.0002);
+  EXPECT_EQ(s.sim.dfsph.max_divergence_iterations, 0);  // no divergence solve
+  EXPECT_EQ(s.sim.dfsph.max_divergence_error, d.max_divergence_error);
+  EXPECT_EQ(s.sim.dfsph.max_iterations, d.max_iterations);
+  EXPECT_EQ(s.sim.cfl, 0.6);
 }
 
 TEST(SceneLoader, SmallDambreak) {
@@ -402,6 +419,43 @@ const BadCase kBadCases[] = {
      "coupling.penalty_strength: ", "> 0"},
     {"unknown method", [](json& s) { s["coupling"]["method"] = "magic"; },
      "coupling.method: ", "\"magic\""},
+    {"unknown solver", [](json& s) { s["fluid"]["solver"] = "isph"; },
+     "fluid.solver: ", "unknown value \"isph\""},
+    {"dfsph settings without dfsph",
+     [](json& s) {
+       s["fluid"]["dfsph"] = {{"max_iterations", 50}};
+     },
+     "fluid.dfsph: ", "only used with \"solver\": \"dfsph\""},
+    {"dfsph density error too large",
+     [](json& s) {
+       s["fluid"]["solver"] = "dfsph";
+       s["fluid"]["dfsph"] = {{"max_density_error", 0.5}};
+     },
+     "fluid.dfsph.max_density_error: ", "in (0, 0.1]"},
+    {"dfsph iterations not whole",
+     [](json& s) {
+       s["fluid"]["solver"] = "dfsph";
+       s["fluid"]["dfsph"] = {{"max_iterations", 10.5}};
+     },
+     "fluid.dfsph.max_iterations: ", "whole number"},
+    {"dfsph one iteration",
+     [](json& s) {
+       s["fluid"]["solver"] = "dfsph";
+       s["fluid"]["dfsph"] = {{"max_iterations", 1}};
+     },
+     "fluid.dfsph.max_iterations: ", "in [2, 1000000] (got 1)"},
+    {"dfsph unknown field",
+     [](json& s) {
+       s["fluid"]["solver"] = "dfsph";
+       s["fluid"]["dfsph"] = {{"tolerance", 0.01}};
+     },
+     "fluid.dfsph.tolerance: ", "unknown field"},
+    {"dfsph with a large cfl",
+     [](json& s) {
+       s["fluid"]["solver"] = "dfsph";
+       s["time"]["cfl"] = 0.8;
+     },
+     "time.cfl: ", "(0, 0.6] with fluid.solver \"dfsph\""},
     {"domain max < min",
      [](json& s) {
        s["domain"] = {{"min", {0, 0, 0}}, {"max", {1, 0, 1}}};
