@@ -1,4 +1,4 @@
-// The explicit WCSPH step's stability limits (DESIGN.md §2): the largest time step the
+// The fluid step's stability limits (DESIGN.md §2): the largest time step the
 // fluid allows, from its speed of sound, its fastest particle (or wall), its largest
 // acceleration and its viscosity.
 #pragma once

@@ -1,0 +1,140 @@
+// The two pressure solvers on one scene, per simulated second: the weakly compressible
+// fluid (the scene as it is) and the divergence-free solver (fluid.solver "dfsph", its
+// time step bound by the flow's speed and by --dfsph-max-dt). Prints, per solver: fluid
+// particles, steps, wall seconds, wall seconds per simulated second, ns per particle per
+// step, the divergence-free solver's iterations per step and ns per particle per iteration,
+// the density error (average over the steps of the average compression, the worst step's
+// average, the largest single density ratio) and whether any fluid entered a body; then
+// how many times less wall time the divergence-free solver needed.
+//
+//   wake_bench_solvers [--scene FILE] [--particles N] [--sim-time T] [--threads K]
+//                      [--dfsph-max-dt DT] [--solvers wcsph,dfsph]
+//
+// Defaults: bench/spheric2.json at its own resolution (~105k particles), 1 simulated
+// second, 1 thread, DFSPH's max_dt 1 ms.
+#include "bullet_bridge/scene_world.hpp"
+#include "coupling/simulation.hpp"
+#include "io/scene.hpp"
+
+#include <omp.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace wake;
+
+namespace {
+
+struct Options {
+  std::string scene = "bench/spheric2.json";
+  long particles = 0;  ///< 0: the scene's own resolution
+  double sim_time = 1.0;
+  int threads = 1;
+  double dfsph_max_dt = 1e-3;
+  std::vector<std::string> solvers = {"wcsph", "dfsph"};
+};
+
+[[noreturn]] void usage(const char* program, const std::string& msg) {
+  std::fprintf(stderr,
+               "error: %s\nusage: %s [--scene FILE] [--particles N] [--sim-time T] [--threads K]"
+               " [--dfsph-max-dt DT] [--solvers wcsph,dfsph]\n",
+               msg.c_str(), program);
+  std::exit(2);
+}
+
+Options parse(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    auto value = [&](const char* name) -> std::string {
+      if (i + 1 >= argc) usage(argv[0], std::string(name) + " needs a value");
+      return argv[++i];
+    };
+    const std::string a = argv[i];
+    if (a == "--scene")
+      o.scene = value("--scene");
+    else if (a == "--particles")
+      o.particles = std::stol(value("--particles"));
+    else if (a == "--sim-time")
+      o.sim_time = std::stod(value("--sim-time"));
+    else if (a == "--threads")
+      o.threads = std::stoi(value("--threads"));
+    else if (a == "--dfsph-max-dt")
+      o.dfsph_max_dt = std::stod(value("--dfsph-max-dt"));
+    else if (a == "--solvers") {
+      o.solvers.clear();
+      std::stringstream ss(value("--solvers"));
+      for (std::string s; std::getline(ss, s, ',');) {
+        if (s != "wcsph" && s != "dfsph") usage(argv[0], "unknown solver " + s);
+        o.solvers.push_back(s);
+      }
+    } else
+      usage(argv[0], "unknown option " + a);
+  }
+  if (!(o.sim_time > 0) || o.threads < 1 || o.particles < 0 || !(o.dfsph_max_dt > 0) ||
+      o.solvers.empty())
+    usage(argv[0], "values must be positive");
+  return o;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options opt = parse(argc, argv);
+  omp_set_num_threads(opt.threads);
+  std::printf("# Wake solver benchmark: %s, %.3g simulated s, %d thread(s)\n", opt.scene.c_str(),
+              opt.sim_time, opt.threads);
+  std::printf("%6s %8s %7s %9s %10s %10s %8s %8s %10s %10s %10s %9s %4s\n", "solver", "fluid",
+              "steps", "wall[s]", "s/sim_s", "ns/p/step", "it/step", "div/step", "ns/p/it",
+              "avg_err", "worst_err", "max_rho", "pen");
+  double wall_wcsph = 0, wall_dfsph = 0;
+  for (const std::string& name : opt.solvers) {
+    SceneFile scene;
+    try {
+      scene = loadScene(opt.scene);
+      if (opt.particles > 0)
+        overrideResolution(scene,
+                           std::cbrt(double(opt.particles) / estimateFluidParticles(scene.sim)));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      return 1;
+    }
+    const bool dfsph = name == "dfsph";
+    if (dfsph) {
+      scene.sim.solver = FluidSolver::Dfsph;
+      scene.sim.max_dt = opt.dfsph_max_dt;
+      scene.sim.cfl = std::min(scene.sim.cfl, 0.6);
+    }
+    SceneWorld world(scene.sim, scene.bodies);
+    world.coupled().start();
+    Simulation& sim = world.coupled().simulation();
+    const auto t0 = std::chrono::steady_clock::now();
+    while (sim.time() < opt.sim_time)
+      sim.step(opt.sim_time);
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double steps = double(sim.steps());
+    const double n = double(sim.fluidParticles());
+    const double iterations = double(sim.densityIterations()) / steps;
+    const double divergence = double(sim.divergenceIterations()) / steps;
+    // The solver's share of the step (its passes are counted in `forces`, with the
+    // viscous forces) per iteration of either solve.
+    const double per_iteration =
+        dfsph ? 1e9 * sim.timings().forces / steps / n / std::max(1.0, iterations + divergence)
+              : 0.0;
+    std::printf("%6s %8.0f %7.0f %9.2f %10.2f %10.1f %8.2f %8.2f %10.1f %10.5f %10.5f %9.4f %4zu\n",
+                name.c_str(), n, steps, wall, wall / sim.time(), 1e9 * wall / steps / n, iterations,
+                divergence, per_iteration, sim.averageDensityError(), sim.maxStepDensityError(),
+                sim.maxDensityRatio(), sim.maxPenetrating());
+    (dfsph ? wall_dfsph : wall_wcsph) = wall;
+  }
+  if (wall_wcsph > 0 && wall_dfsph > 0)
+    std::printf("# dfsph needs %.2fx less wall time than wcsph for the same simulated time\n",
+                wall_wcsph / wall_dfsph);
+  return 0;
+}
