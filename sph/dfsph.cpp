@@ -40,17 +40,30 @@ Vec3 load(const float* g) {
 
 template <class T, class Term>
 void DivergenceFreeSolver::pairSums(const PairLists& pairs, const T& zero, std::vector<T>& sum,
-                                    Term&& term) const {
+                                    Term&& term) {
+  pairSums(pairs, nullptr, zero, sum, term);
+}
+
+template <class T, class Term>
+void DivergenceFreeSolver::pairSums(const PairLists& pairs, const GradientSource* fill,
+                                    const T& zero, std::vector<T>& sum, Term&& term) {
   sum.resize(pairs.size());
   forEachRange(pairs, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
     const std::uint32_t end = static_cast<std::uint32_t>(i1);
     forEachListOfRange(
         pairs, r, i0, i1,
         [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e, bool later) {
-          const float* grad = (later ? later_grad_[r] : before_grad_[r]).data();
+          float* grad = (later ? later_grad_[r] : before_grad_[r]).data();
           T own = later ? sum[i] : zero;
           for (std::uint64_t t = k; t < e; ++t) {
             const std::uint32_t j = nb[t];
+            if (fill) {
+              const Vec3 d = fill->x[i] - fill->x[j];
+              const Vec3 g =
+                  (fill->mass * fill->kernel->derivativeOverR(std::sqrt(d.squaredNorm()))) * d;
+              for (int c = 0; c < 3; ++c)
+                grad[3 * t + c] = static_cast<float>(g[c]);
+            }
             term(static_cast<std::size_t>(i), j, load(grad + 3 * t), own,
                  later && j < end ? &sum[j] : nullptr);
           }
@@ -95,27 +108,17 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const std::vector<Vec3>& 
   before_grad_.resize(ranges);
   const CubicSplineKernel& kernel = fluid.kernel();
   const double m = fluid.particleMass();
-  const Vec3* x = st.position.data();
   // g_ab = m grad_a W(x_a - x_b), for each list from its own point's side (g_ba = -g_ab
-  // bit for bit: x_b - x_a is -(x_a - x_b) exactly).
-  forEachRange(pairs, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
+  // bit for bit: x_b - x_a is -(x_a - x_b) exactly), stored as the factor's sums read them.
+  for (std::size_t r = 0; r < ranges; ++r) {
+    const std::size_t i0 = pairs.range[r], i1 = pairs.range[r + 1];
     const std::size_t used = i1 > i0 ? pairs.begin[i1 - 1] + pairs.count[i1 - 1] : 0;
     later_grad_[r].resize(3 * used);
     before_grad_[r].resize(3 * pairs.before[r].size());
-    forEachListOfRange(
-        pairs, r, i0, i1,
-        [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e, bool later) {
-          float* grad = (later ? later_grad_[r] : before_grad_[r]).data();
-          for (std::uint64_t t = k; t < e; ++t) {
-            const Vec3 d = x[i] - x[nb[t]];
-            const Vec3 g = (m * kernel.derivativeOverR(std::sqrt(d.squaredNorm()))) * d;
-            for (int c = 0; c < 3; ++c)
-              grad[3 * t + c] = static_cast<float>(g[c]);
-          }
-        });
-  });
+  }
+  const GradientSource source{st.position.data(), &kernel, m};
   std::vector<GradientSums> sums;
-  pairSums(pairs, GradientSums{}, sums,
+  pairSums(pairs, &source, GradientSums{}, sums,
            [](std::size_t, std::uint32_t, const Vec3& g, GradientSums& own, GradientSums* other) {
              const double sq = g.squaredNorm();
              own.g += g;
@@ -151,6 +154,7 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const std::vector<Vec3>& 
     sparse_[i] = around < enough;
   }
   impulse_.assign(n, 0.0);  // a new step
+  rates_fresh_ = false;
 }
 
 void DivergenceFreeSolver::densityRates(const Fluid& fluid,
@@ -221,12 +225,12 @@ int DivergenceFreeSolver::solveDivergence(Fluid& fluid, const std::vector<double
                            return rate;
                          });
     stats_.divergence_error = error;
-    if ((error <= params_.max_divergence_error && iterations >= 1) ||
-        iterations >= params_.max_divergence_iterations)
+    if (error <= params_.max_divergence_error || iterations >= params_.max_divergence_iterations)
       break;
     applyImpulse(fluid);
     ++iterations;
   }
+  rates_fresh_ = true;  // rate_: of the velocities the solve leaves
   stats_.divergence_iterations = iterations;
   return iterations;
 }
@@ -243,9 +247,11 @@ int DivergenceFreeSolver::solveDensity(Fluid& fluid, const std::vector<double>& 
   const double inv_dt = 1.0 / dt;
   s_.assign(n, 0.0);
   ds_.resize(n);
-  // Warm start: half the last step's pressure (s = dt p / rho^2) where the fluid is
-  // compressed at first; the iterations only add pressure, so this is how it falls.
-  densityRates(fluid, boundary_flux);
+  // Warm start: half the last step's pressure (s = dt p / rho^2) where the fluid would be
+  // compressed at the step's end with the velocities of its start (the divergence solve's
+  // rates); the iterations only add pressure, so this is how it falls.
+  if (!rates_fresh_) densityRates(fluid, boundary_flux);
+  rates_fresh_ = false;
   const double any = chunkedSum(n, [&](std::size_t i) {
     const double rho = st.density[i];
     const bool compressed = rho + dt * rate_[i] > rho0;
@@ -256,7 +262,7 @@ int DivergenceFreeSolver::solveDensity(Fluid& fluid, const std::vector<double>& 
   const double scale = 1.0 / (double(n) * rho0);
   int iterations = 0;
   for (;;) {
-    if (iterations > 0 || any > 0.0) densityRates(fluid, boundary_flux);
+    densityRates(fluid, boundary_flux);
     // Each particle's pressure grows by what removes its own compression at the step's end.
     const double error = scale * chunkedSum(n, [&](std::size_t i) {
                            const double excess =

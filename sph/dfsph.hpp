@@ -88,7 +88,17 @@ class DivergenceFreeSolver {
   /// Pair sums over the lists with the stored gradients: term(i, j, g, own, other) adds
   /// i's term to own and j's to *other (null when j's sum is not this range's to write).
   template <class T, class Term>
-  void pairSums(const PairLists& pairs, const T& zero, std::vector<T>& sum, Term&& term) const;
+  void pairSums(const PairLists& pairs, const T& zero, std::vector<T>& sum, Term&& term);
+  /// Where the pairs' gradients come from when pairSums computes and stores them.
+  struct GradientSource {
+    const Vec3* x;
+    const CubicSplineKernel* kernel;
+    double mass;
+  };
+  /// As above; with `fill`, each pair's g_ab is computed from the positions and stored first.
+  template <class T, class Term>
+  void pairSums(const PairLists& pairs, const GradientSource* fill, const T& zero,
+                std::vector<T>& sum, Term&& term);
   /// D_a (rate of change of density) of every particle into rate_.
   void densityRates(const Fluid& fluid, const std::vector<double>& boundary_flux);
   /// Applies the increments ds_ (s per particle) to the velocities and to impulse_.
@@ -106,6 +116,7 @@ class DivergenceFreeSolver {
   std::vector<double> factor_;        ///< (n) a_a (m^8 / kg^2)
   std::vector<std::uint8_t> sparse_;  ///< (n) too few neighbours for the divergence solve
   std::vector<double> rate_;          ///< (n) D_a
+  bool rates_fresh_ = false;          ///< rate_ is of the velocities as they are
   std::vector<double> s_;             ///< (n) this solve's s so far
   std::vector<double> ds_;            ///< (n) this iteration's increment of s
   std::vector<Vec3> dv_;              ///< (n) velocity change of the pair terms
