@@ -116,4 +116,48 @@ void Boundaries::addSolverReaction(const Fluid& fluid, const BodyPlacement& at,
     }
 }
 
+void Boundaries::calibrateVolumes(const Fluid& fluid, const BodyPlacement& at) {
+  const FluidState& st = fluid.state();
+  const std::size_t n = st.size();
+  if (n == 0 || bodies_.empty()) return;
+  const double rho0 = fluid_.rest_density;
+  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
+  std::vector<double> wall(n), scale(n);
+  WallPairs pairs;
+  for (int round = 0; round < 4; ++round) {
+    std::fill(wall.begin(), wall.end(), 0.0);
+    wallPass(fluid, at, wall, nullptr, nullptr, &pairs);
+    // The scale of its wall share each particle asks for: what removes its excess.
+    for (std::size_t a = 0; a < n; ++a) {
+      const double excess = st.density[a] + wall[a] - rho0;
+      scale[a] = wall[a] > 0.0 && excess > 0.0 ? std::max(0.25, 1.0 - excess / wall[a]) : 1.0;
+    }
+    transposePairs(pairs);
+    auto rescale = [&](SampleSet& set, std::size_t s, const Mat3& rotation, const Vec3& origin) {
+      const std::vector<std::uint32_t>& offset = pairs.offset[s];
+      const std::vector<std::uint32_t>& particle = pairs.particle[s];
+      const std::int64_t count = static_cast<std::int64_t>(set.position.size());
+#pragma omp parallel for schedule(static)
+      for (std::int64_t k = 0; k < count; ++k) {
+        double weighted = 0.0, weight = 0.0;
+        for (std::uint32_t t = offset[k]; t < offset[k + 1]; ++t) {
+          const std::uint32_t a = particle[t];
+          const Vec3 p = rotation.transpose() * (st.position[a] - origin);
+          const double d_sq = (p - set.position[k]).squaredNorm();
+          if (d_sq >= support_sq) continue;
+          const double w = kernel_.value(std::sqrt(d_sq));
+          weighted += w * scale[a];
+          weight += w;
+        }
+        if (weight > 0.0) set.volume[k] *= weighted / weight;
+      }
+    };
+    rescale(static_, 0, Mat3::Identity(), Vec3::Zero());
+    for (std::size_t m = 0; m < moving_.size(); ++m) {
+      const BodyFrame& f = at[moving_[m].body];
+      rescale(moving_[m].samples, m + 1, f.rotation, f.pose.position);
+    }
+  }
+}
+
 }  // namespace wake

@@ -218,6 +218,15 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
         }
   }
   nu_max_ = fluid_->maxKinematicViscosity();
+  if (dfsph_ && st.size() > 0) {
+    // The walls' density share made to agree with the fluid as it starts (on a sorted copy:
+    // the run's state is not touched).
+    FluidState copy = st;
+    Fluid probe(s.fluid, s.domain, &copy);
+    probe.updateNeighbors();
+    probe.computeFluidDensity();
+    boundaries_->calibrateVolumes(probe, start);
+  }
 }
 
 Simulation::~Simulation() = default;

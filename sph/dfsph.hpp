@@ -38,7 +38,7 @@ namespace wake {
 struct DfsphParams {
   /// Average compression max(0, rho* / rho0 - 1) over the particles (and expansion where a
   /// particle still has pressure) at which the density solve stops, in (0, 0.1].
-  double max_density_error = 5e-4;
+  double max_density_error = 3e-4;
   /// Average compression rate dt max(0, d rho / dt) / rho0 (over the particles with
   /// enough neighbours for a rate: not splashes) at which the divergence solve stops, in
   /// (0, 1].
