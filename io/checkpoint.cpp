@@ -143,10 +143,18 @@ SimulationState readCheckpoint(const std::string& path, CheckpointInfo* info) {
   run.max_penetrating = u64("max_penetrating");
   run.window_penetrating = u64("window_penetrating");
   run.last_contacts = u64("last_contacts");
-  run.density_error_sum = f64("density_error_sum");
-  run.max_step_density_error = f64("max_step_density_error");
-  run.solver_iterations = u64("solver_iterations");
-  run.divergence_iterations = u64("divergence_iterations");
+  // Counters added with the divergence-free solver: a checkpoint written before them
+  // resumes with them at zero.
+  auto optional_f64 = [&](const char* name) {
+    return H5Aexists(group, name) > 0 ? f64(name) : 0.0;
+  };
+  auto optional_u64 = [&](const char* name) {
+    return H5Aexists(group, name) > 0 ? u64(name) : std::uint64_t{0};
+  };
+  run.density_error_sum = optional_f64("density_error_sum");
+  run.max_step_density_error = optional_f64("max_step_density_error");
+  run.solver_iterations = optional_u64("solver_iterations");
+  run.divergence_iterations = optional_u64("divergence_iterations");
   auto vec3s = [&](const char* name) {
     const std::vector<double> flat = r.readDataset<double>(group, name, H5T_NATIVE_DOUBLE, 3);
     std::vector<Vec3> out(flat.size() / 3);
