@@ -335,6 +335,20 @@ class Boundaries {
   Vec3 gradientSum(const SampleSet& set, const Vec3& p, const std::uint32_t* near,
                    std::size_t count, const Vec3& u, const Vec3& omega, double* flux, Vec3* moment,
                    std::uint32_t* within = nullptr) const;
+  /// Calls f(k, d, dwr) for each of the `count` samples `near` of one set that lie within
+  /// the kernel support of p (set space): d = p - x_k, dwr = W'(|d|) / |d|.
+  template <class F>
+  void forEachSampleInSupport(const SampleSet& set, const Vec3& p, const std::uint32_t* near,
+                              std::size_t count, F&& f) const {
+    const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
+    for (std::size_t t = 0; t < count; ++t) {
+      const std::uint32_t k = near[t];
+      const Vec3 d = p - set.position[k];
+      const double d_sq = d.squaredNorm();
+      if (d_sq >= support_sq) continue;
+      f(k, d, kernel_.derivativeOverR(std::sqrt(d_sq)));
+    }
+  }
   /// The sample lists of `pairs` (sample -> particles) from its particle lists.
   void transposePairs(WallPairs& pairs) const;
   void samplePressure(const Fluid& fluid, const SampleSet& set, const Mat3& rotation,

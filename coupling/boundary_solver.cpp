@@ -14,19 +14,14 @@ namespace wake {
 Vec3 Boundaries::gradientSum(const SampleSet& set, const Vec3& p, const std::uint32_t* near,
                              std::size_t count, const Vec3& u, const Vec3& omega, double* flux,
                              Vec3* moment, std::uint32_t* within) const {
-  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
   Vec3 sum = Vec3::Zero();
-  for (std::size_t t = 0; t < count; ++t) {
-    const std::uint32_t k = near[t];
-    const Vec3 d = p - set.position[k];
-    const double d_sq = d.squaredNorm();
-    if (d_sq >= support_sq) continue;
-    const Vec3 g = (set.volume[k] * kernel_.derivativeOverR(std::sqrt(d_sq))) * d;
+  forEachSampleInSupport(set, p, near, count, [&](std::uint32_t k, const Vec3& d, double dwr) {
+    const Vec3 g = (set.volume[k] * dwr) * d;
     sum += g;
     if (within) ++*within;
     if (flux) *flux += (u + omega.cross(set.position[k])).dot(g);
     if (moment) *moment += set.position[k].cross(g);
-  }
+  });
   return sum;
 }
 

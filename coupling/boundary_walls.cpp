@@ -59,18 +59,12 @@ double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, cons
 Vec3 Boundaries::pressureSum(const SampleSet& set, const std::vector<double>& p_rho2, const Vec3& p,
                              double pr2, const std::uint32_t* near, std::size_t count,
                              Vec3* moment) const {
-  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
   Vec3 sum = Vec3::Zero();
-  for (std::size_t t = 0; t < count; ++t) {
-    const std::uint32_t k = near[t];
-    const Vec3 d = p - set.position[k];
-    const double d_sq = d.squaredNorm();
-    if (d_sq >= support_sq) continue;
-    const Vec3 g =
-        ((pr2 + p_rho2[k]) * set.volume[k] * kernel_.derivativeOverR(std::sqrt(d_sq))) * d;
+  forEachSampleInSupport(set, p, near, count, [&](std::uint32_t k, const Vec3& d, double dwr) {
+    const Vec3 g = ((pr2 + p_rho2[k]) * set.volume[k] * dwr) * d;
     sum += g;
     if (moment) *moment += set.position[k].cross(g);
-  }
+  });
   return sum;
 }
 
