@@ -14,6 +14,7 @@
 
 #include "coupling/rigid_body.hpp"
 #include "geometry/shape.hpp"
+#include "sph/dfsph.hpp"
 #include "sph/fluid.hpp"
 
 #include <array>
@@ -187,14 +188,12 @@ class Boundaries {
                        std::vector<Wrench>& reaction) const;
 
   /// The walls' and bodies' terms of the divergence-free solver (sph/dfsph.hpp), from this
-  /// step's pairs (addWallTerms) with the bodies at `at`:
-  /// - `gradient` (n, kg/m^4): G_a = rho0 sum_k V_k grad_a W_ak, world;
-  /// - `flux` (n, kg/(m^3 s)): B_a = rho0 sum_k V_k v_k . grad_a W_ak, v_k the sample's
-  ///   velocity (its body's at `at`; zero for static bodies);
-  /// - `neighbors` (n): the samples within the kernel support.
+  /// step's pairs (addWallTerms) with the bodies at `at`, into `out` (SolverBoundary):
+  /// G_a = rho0 sum_k V_k grad_a W_ak (world); B_a = rho0 sum_k V_k v_k . grad_a W_ak, v_k
+  /// the sample's velocity (its body's at `at`; zero for static bodies); the samples within
+  /// the kernel support; H_a = sum_k V_k max(0, g . (x_k - x_a)) grad_a W_ak under `gravity`.
   void solverTerms(const Fluid& fluid, const BodyPlacement& at, const WallPairs& pairs,
-                   std::vector<Vec3>& gradient, std::vector<double>& flux,
-                   std::vector<std::uint32_t>& neighbors) const;
+                   const Vec3& gravity, SolverBoundary& out) const;
   /// Makes the walls' share of the density agree with a fluid that starts at rest on the
   /// lattice (the divergence-free solver's start; sph/dfsph.hpp). Single layers of samples
   /// over-count the share at concave edges and corners (a tank filled on the lattice: +1.6 %
@@ -206,14 +205,15 @@ class Boundaries {
   /// of the scales its particles ask for (1 where nothing is compressed). A few rounds;
   /// volumes only shrink. Call before the first step, with the bodies at `at`.
   void calibrateVolumes(const Fluid& fluid, const BodyPlacement& at);
-  /// The solver's pressure force on each two-way body: particle a's impulse s_a (the sum of
-  /// its solves' pressure terms, m^5/(kg s)) pushes the body's samples k with
-  /// m s_a rho0 V_k grad_a W_ak / dt (the opposite of the walls' share of its velocity
-  /// change over the step). Adds the force and its torque about the centre of mass to
-  /// `reaction`, summed in fixed particle chunks: the same bits on any number of threads.
+  /// The solver's pressure force on each two-way body, the opposite of the share of its
+  /// samples k in each particle's velocity change over the step (sph/dfsph.hpp): particle a
+  /// pushes them with m wall_impulse_a rho0 V_k grad_a W_ak / dt plus the hydrostatic part
+  /// m V_k (max(0, g . (x_k - x_a)) + lift_a) grad_a W_ak. Adds the force and its torque
+  /// about the centre of mass to `reaction`, summed in fixed particle chunks: the same bits
+  /// on any number of threads.
   void addSolverReaction(const Fluid& fluid, const BodyPlacement& at, const WallPairs& pairs,
-                         const std::vector<double>& impulse, double dt,
-                         std::vector<Wrench>& reaction) const;
+                         const std::vector<double>& wall_impulse, const std::vector<double>& lift,
+                         const Vec3& gravity, double dt, std::vector<Wrench>& reaction) const;
 
   /// Most bodies one fluid particle is in contact with at once (the nearest are kept).
   static constexpr std::size_t kMaxContacts = 8;
@@ -328,13 +328,22 @@ class Boundaries {
   /// p (set space), and its moment sum_k x_k x (...) when asked (two-way bodies).
   Vec3 pressureSum(const SampleSet& set, const std::vector<double>& p_rho2, const Vec3& p,
                    double pr2, const std::uint32_t* near, std::size_t count, Vec3* moment) const;
-  /// sum_k V_k grad W_ak over the `count` samples `near` of one set at p (set space); adds
-  /// sum_k V_k (u + omega x x_k) . grad W_ak to `flux` and sum_k x_k x V_k grad W_ak to
-  /// `moment` when they are given.
-  /// `within` (may be null) counts the samples within the support.
+  /// What gradientSum adds up besides sum_k V_k grad W_ak (each may be null).
+  struct GradientExtras {
+    double* flux = nullptr;           ///< += sum_k V_k (u + omega x x_k) . grad W_ak
+    Vec3* moment = nullptr;           ///< += sum_k x_k x V_k grad W_ak
+    std::uint32_t* within = nullptr;  ///< += the samples within the support
+    /// With `gravity` (set space): += sum_k V_k max(0, g . (x_k - p)) grad W_ak, and its
+    /// moment to `hydrostatic_moment` when that is given.
+    const Vec3* gravity = nullptr;
+    Vec3* hydrostatic = nullptr;
+    Vec3* hydrostatic_moment = nullptr;
+  };
+  /// sum_k V_k grad W_ak over the `count` samples `near` of one set at p (set space), and
+  /// the `extras` asked for (u, omega: the set's velocity, set space).
   Vec3 gradientSum(const SampleSet& set, const Vec3& p, const std::uint32_t* near,
-                   std::size_t count, const Vec3& u, const Vec3& omega, double* flux, Vec3* moment,
-                   std::uint32_t* within = nullptr) const;
+                   std::size_t count, const Vec3& u, const Vec3& omega,
+                   const GradientExtras& extras) const;
   /// Calls f(k, d, dwr) for each of the `count` samples `near` of one set that lie within
   /// the kernel support of p (set space): d = p - x_k, dwr = W'(|d|) / |d|.
   template <class F>

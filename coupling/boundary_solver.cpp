@@ -12,28 +12,34 @@
 namespace wake {
 
 Vec3 Boundaries::gradientSum(const SampleSet& set, const Vec3& p, const std::uint32_t* near,
-                             std::size_t count, const Vec3& u, const Vec3& omega, double* flux,
-                             Vec3* moment, std::uint32_t* within) const {
+                             std::size_t count, const Vec3& u, const Vec3& omega,
+                             const GradientExtras& extras) const {
   Vec3 sum = Vec3::Zero();
   forEachSampleInSupport(set, p, near, count, [&](std::uint32_t k, const Vec3& d, double dwr) {
     const Vec3 g = (set.volume[k] * dwr) * d;
     sum += g;
-    if (within) ++*within;
-    if (flux) *flux += (u + omega.cross(set.position[k])).dot(g);
-    if (moment) *moment += set.position[k].cross(g);
+    if (extras.within) ++*extras.within;
+    if (extras.flux) *extras.flux += (u + omega.cross(set.position[k])).dot(g);
+    if (extras.moment) *extras.moment += set.position[k].cross(g);
+    if (!extras.gravity) return;
+    // g . (x_k - p) = -g . d: the weight of the fluid between p and a sample below it.
+    const double rise = -extras.gravity->dot(d);
+    if (rise <= 0.0) return;
+    *extras.hydrostatic += rise * g;
+    if (extras.hydrostatic_moment) *extras.hydrostatic_moment += rise * set.position[k].cross(g);
   });
   return sum;
 }
 
 void Boundaries::solverTerms(const Fluid& fluid, const BodyPlacement& at, const WallPairs& pairs,
-                             std::vector<Vec3>& gradient, std::vector<double>& flux,
-                             std::vector<std::uint32_t>& neighbors) const {
+                             const Vec3& gravity, SolverBoundary& out) const {
   const FluidState& st = fluid.state();
   const std::size_t n = st.size();
   if (pairs.particles != n) throw std::logic_error("Boundaries::solverTerms before addWallTerms");
-  gradient.assign(n, Vec3::Zero());
-  flux.assign(n, 0.0);
-  neighbors.assign(n, 0u);
+  out.gradient.assign(n, Vec3::Zero());
+  out.flux.assign(n, 0.0);
+  out.neighbors.assign(n, 0u);
+  out.hydrostatic.assign(n, Vec3::Zero());
   const double rho0 = fluid_.rest_density;
   const std::size_t chunks = (n + kChunk - 1) / kChunk;
   const Vec3 zero = Vec3::Zero();
@@ -42,13 +48,17 @@ void Boundaries::solverTerms(const Fluid& fluid, const BodyPlacement& at, const 
     const std::size_t end = std::min(n, (c + 1) * kChunk);
     for (std::size_t i = c * kChunk; i < end; ++i) {
       const Vec3 xi = st.position[i];
-      Vec3 g = Vec3::Zero();
+      Vec3 g = Vec3::Zero(), h = Vec3::Zero();
       double b = 0.0;
       std::uint32_t within = 0;
       pairs.forEachSegment(
           i, c, c * kChunk, [&](std::uint32_t set, const std::uint32_t* near, std::uint32_t count) {
+            GradientExtras extras;
+            extras.within = &within;
             if (set == 0) {
-              g += gradientSum(static_, xi, near, count, zero, zero, nullptr, nullptr, &within);
+              extras.gravity = &gravity;
+              extras.hydrostatic = &h;
+              g += gradientSum(static_, xi, near, count, zero, zero, extras);
               return;
             }
             const MovingBody& m = moving_[set - 1];
@@ -56,29 +66,38 @@ void Boundaries::solverTerms(const Fluid& fluid, const BodyPlacement& at, const 
             const Mat3 rt = f.rotation.transpose();
             const Vec3 p = rt * (xi - f.pose.position);
             // The samples' velocity in the set's frame: v_c + omega x x_k, both turned.
+            const Vec3 g_set = rt * gravity;
+            Vec3 h_set = Vec3::Zero();
+            extras.flux = &b;
+            extras.gravity = &g_set;
+            extras.hydrostatic = &h_set;
             g += f.rotation * gradientSum(m.samples, p, near, count, rt * f.linear_velocity,
-                                          rt * f.angular_velocity, &b, nullptr, &within);
+                                          rt * f.angular_velocity, extras);
+            h += f.rotation * h_set;
           });
-      gradient[i] = rho0 * g;
-      flux[i] = rho0 * b;
-      neighbors[i] = within;
+      out.gradient[i] = rho0 * g;
+      out.flux[i] = rho0 * b;
+      out.neighbors[i] = within;
+      out.hydrostatic[i] = h;
     }
   }
 }
 
 void Boundaries::addSolverReaction(const Fluid& fluid, const BodyPlacement& at,
-                                   const WallPairs& pairs, const std::vector<double>& impulse,
-                                   double dt, std::vector<Wrench>& reaction) const {
+                                   const WallPairs& pairs, const std::vector<double>& wall_impulse,
+                                   const std::vector<double>& lift, const Vec3& gravity, double dt,
+                                   std::vector<Wrench>& reaction) const {
   const FluidState& st = fluid.state();
   const std::size_t n = st.size(), nb = bodies_.size();
   if (n == 0 || nb == 0) return;
-  if (pairs.particles != n || impulse.size() != n)
+  if (pairs.particles != n || wall_impulse.size() != n || lift.size() != n)
     throw std::logic_error("Boundaries::addSolverReaction before addWallTerms or the solve");
   bool two_way = false;
   for (const MovingBody& m : moving_)
     two_way = two_way || bodies_[m.body].settings.twoWay();
   if (!two_way) return;
-  const double scale = 2.0 * fluid.particleMass() * fluid_.rest_density / dt;
+  const double mass = fluid.particleMass();
+  const double scale = mass * fluid_.rest_density / dt;
   const std::size_t chunks = (n + kChunk - 1) / kChunk;
   chunk_reaction_.assign(chunks * nb, Wrench{});
   const Vec3 zero = Vec3::Zero();
@@ -86,7 +105,6 @@ void Boundaries::addSolverReaction(const Fluid& fluid, const BodyPlacement& at,
   for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
     const std::size_t end = std::min(n, (c + 1) * kChunk);
     for (std::size_t i = c * kChunk; i < end; ++i) {
-      if (impulse[i] == 0.0) continue;
       const Vec3 xi = st.position[i];
       pairs.forEachSegment(
           i, c, c * kChunk, [&](std::uint32_t set, const std::uint32_t* near, std::uint32_t count) {
@@ -94,13 +112,20 @@ void Boundaries::addSolverReaction(const Fluid& fluid, const BodyPlacement& at,
             const MovingBody& m = moving_[set - 1];
             if (!bodies_[m.body].settings.twoWay()) return;
             const BodyFrame& f = at[m.body];
-            const Vec3 p = f.rotation.transpose() * (xi - f.pose.position);
-            Vec3 moment = Vec3::Zero();
-            const Vec3 g = gradientSum(m.samples, p, near, count, zero, zero, nullptr, &moment);
-            const double coefficient = scale * impulse[i];
+            const Mat3 rt = f.rotation.transpose();
+            const Vec3 p = rt * (xi - f.pose.position);
+            const Vec3 g_set = rt * gravity;
+            Vec3 moment = Vec3::Zero(), h = Vec3::Zero(), h_moment = Vec3::Zero();
+            GradientExtras extras;
+            extras.moment = &moment;
+            extras.gravity = &g_set;
+            extras.hydrostatic = &h;
+            extras.hydrostatic_moment = &h_moment;
+            const Vec3 g = gradientSum(m.samples, p, near, count, zero, zero, extras);
+            const double pressure = scale * wall_impulse[i] + mass * lift[i];
             Wrench& w = chunk_reaction_[c * nb + m.body];
-            w.force += coefficient * (f.rotation * g);
-            w.torque += coefficient * (f.rotation * moment);
+            w.force += f.rotation * (pressure * g + mass * h);
+            w.torque += f.rotation * (pressure * moment + mass * h_moment);
           });
     }
   }

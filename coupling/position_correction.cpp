@@ -10,7 +10,7 @@
 namespace wake {
 
 bool projectOut(const Boundaries& boundaries, const BodyPlacement& at, Vec3& y, double s,
-                int passes) {
+                int passes, Vec3* velocity) {
   const double tolerance = 1e-6 * boundaries.fluidRadius();
   std::array<Contact, Boundaries::kMaxContacts> contacts;
   for (int pass = 0; pass < passes; ++pass) {
@@ -21,6 +21,13 @@ bool projectOut(const Boundaries& boundaries, const BodyPlacement& at, Vec3& y, 
       if (d > tolerance) {
         y += d * contacts[c].normal;
         moved = true;
+        if (velocity) {
+          const BodyFrame& f = at[contacts[c].body];
+          const Vec3 vb =
+              f.linear_velocity + f.angular_velocity.cross(contacts[c].point - f.pose.position);
+          const double vn = (*velocity - vb).dot(contacts[c].normal);
+          if (vn < 0.0) *velocity -= vn * contacts[c].normal;
+        }
       }
     }
     if (!moved) return true;
@@ -93,7 +100,8 @@ bool escape(const Boundaries& boundaries, const BodyPlacement& at, Vec3& x) {
 }
 
 std::size_t correctPositions(const Boundaries& boundaries, const BodyPlacement& at,
-                             std::vector<Vec3>& x, const std::vector<std::uint8_t>& candidates) {
+                             std::vector<Vec3>& x, const std::vector<std::uint8_t>& candidates,
+                             std::vector<Vec3>* v) {
   if (boundaries.bodyCount() == 0) return 0;
   const std::int64_t n = static_cast<std::int64_t>(x.size());
   const double rf = boundaries.fluidRadius();
@@ -103,8 +111,10 @@ std::size_t correctPositions(const Boundaries& boundaries, const BodyPlacement& 
     if (!candidates[i] && !Boundaries::nearMovingBody(x[i], at)) continue;
     // Full clearance r_f from every body (the usual case: one pass, or a few in corners).
     Vec3 xi = x[i];
-    if (projectOut(boundaries, at, xi, rf, 4)) {
+    Vec3 vi = v ? (*v)[i] : Vec3::Zero();
+    if (projectOut(boundaries, at, xi, rf, 4, v ? &vi : nullptr)) {
       x[i] = xi;
+      if (v) (*v)[i] = vi;
       continue;
     }
     // Squeezed: bodies closer than a diameter. The largest clearance they all allow

@@ -28,14 +28,21 @@ namespace wake {
 /// with static bodies, a particle without a contact at its predicted position x* has
 /// none at its final one (uncontrolled particles end exactly at x*). Returns the number
 /// of particles that no move could free (0 unless bodies enclose fluid entirely).
+/// With `v` (the divergence-free solver's steps), a particle moved out of a body in the
+/// usual case also loses its velocity into that body, relative to the body's surface
+/// there (the body has stepped already: the change is not given to it); otherwise a
+/// particle in a concave corner, whose single contact normal is the corner's diagonal,
+/// kept moving into the walls step after step and stirred the fluid around it.
 std::size_t correctPositions(const Boundaries& boundaries, const BodyPlacement& at,
-                             std::vector<Vec3>& x, const std::vector<std::uint8_t>& candidates);
+                             std::vector<Vec3>& x, const std::vector<std::uint8_t>& candidates,
+                             std::vector<Vec3>* v = nullptr);
 
 /// Gauss-Seidel projections of y to clearance s from every body in contact (contacts found
 /// again after each pass), at most `passes` passes. True when y ends with clearance >= s
-/// (to a tolerance).
+/// (to a tolerance). With `velocity`, each projection also removes its approach speed
+/// towards the body it projects from (relative to the body's surface velocity).
 bool projectOut(const Boundaries& boundaries, const BodyPlacement& at, Vec3& y, double s,
-                int passes);
+                int passes, Vec3* velocity = nullptr);
 
 /// Moves x to the nearest point where it can have r_f / 2 from every body, reachable
 /// without crossing a body (see correctPositions). False when there is none within eight

@@ -306,18 +306,16 @@ class Simulation {
   StepTimings timings_;
   /// Scratch space of the step, reused every step (no state: nothing in it outlives one).
   struct Workspace {
-    std::vector<Vec3> x_pred;                       // (n) predicted positions x*
-    std::vector<Vec3> v_old;                        // (n) velocities at the step's start
-    std::vector<std::uint8_t> flags;                // (n) in contact / to remove
-    std::vector<RigidState> body_now, body_final;   // (bodies) states at t and t + dt
-    std::vector<RigidPrediction> body_pred;         // (bodies) predicted states
-    std::vector<Vec3> wall_shear;                   // (n) the walls' viscous shear, m/s^2
-    std::vector<Wrench> wall_reaction;              // (bodies) its reaction on two-way bodies
-    SamplePressure sample_pressure;                 // the boundary samples' pressure
-    WallPairs wall_pairs;                           // the step's (particle, sample) pairs
-    std::vector<Vec3> boundary_gradient;            // (n) Dfsph: the walls' G_a
-    std::vector<double> boundary_flux;              // (n) Dfsph: the walls' B_a
-    std::vector<std::uint32_t> boundary_neighbors;  // (n) Dfsph: samples within the support
+    std::vector<Vec3> x_pred;                      // (n) predicted positions x*
+    std::vector<Vec3> v_old;                       // (n) velocities at the step's start
+    std::vector<std::uint8_t> flags;               // (n) in contact / to remove
+    std::vector<RigidState> body_now, body_final;  // (bodies) states at t and t + dt
+    std::vector<RigidPrediction> body_pred;        // (bodies) predicted states
+    std::vector<Vec3> wall_shear;                  // (n) the walls' viscous shear, m/s^2
+    std::vector<Wrench> wall_reaction;             // (bodies) its reaction on two-way bodies
+    SamplePressure sample_pressure;                // the boundary samples' pressure
+    WallPairs wall_pairs;                          // the step's (particle, sample) pairs
+    SolverBoundary solver_boundary;  // Dfsph: the walls' and bodies' terms of the solves
     BodyPlacement placed;  // the bodies placed for the current stage (now, predicted, final)
   } work_;
   std::optional<HealthError> failure_;  // the error that stopped the run

@@ -16,7 +16,8 @@ namespace {
 struct GradientSums {
   Vec3 g = Vec3::Zero();
   double sq = 0.0;
-  std::uint32_t count = 0;  ///< fluid neighbours
+  std::uint32_t count = 0;     ///< fluid neighbours
+  Vec3 offset = Vec3::Zero();  ///< sum_b |g_ab|^2 (x_b - x_a)
 };
 
 /// Neighbours of a particle inside a fluid at rest on the lattice (spacing s, support 2H):
@@ -91,18 +92,17 @@ double DivergenceFreeSolver::chunkedSum(std::size_t n, F&& f) {
   return total;
 }
 
-void DivergenceFreeSolver::prepare(const Fluid& fluid, const std::vector<Vec3>& boundary_gradient,
-                                   const std::vector<std::uint32_t>& boundary_neighbors) {
+void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& boundary) {
   const FluidState& st = fluid.state();
   const PairLists& pairs = fluid.neighbors();
   const std::size_t n = st.size();
   if (pairs.size() != n)
     throw std::logic_error("DivergenceFreeSolver::prepare before updateNeighbors");
-  if (!boundary_gradient.empty() && boundary_gradient.size() != n)
-    throw std::logic_error("DivergenceFreeSolver::prepare: boundary gradient of another size");
-  if (!boundary_neighbors.empty() && boundary_neighbors.size() != n)
-    throw std::logic_error("DivergenceFreeSolver::prepare: boundary neighbours of another size");
-  boundary_gradient_ = boundary_gradient.empty() ? nullptr : &boundary_gradient;
+  const bool walls = !boundary.gradient.empty();
+  if (walls && (boundary.gradient.size() != n || boundary.flux.size() != n ||
+                boundary.neighbors.size() != n || boundary.hydrostatic.size() != n))
+    throw std::logic_error("DivergenceFreeSolver::prepare: boundary terms of another size");
+  boundary_ = walls ? &boundary : nullptr;
   const std::size_t ranges = pairs.ranges();
   later_grad_.resize(ranges);
   before_grad_.resize(ranges);
@@ -116,26 +116,33 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const std::vector<Vec3>& 
     later_grad_[r].resize(3 * used);
     before_grad_[r].resize(3 * pairs.before[r].size());
   }
-  const GradientSource source{st.position.data(), &kernel, m};
+  const Vec3* x = st.position.data();
+  const GradientSource source{x, &kernel, m};
   std::vector<GradientSums> sums;
-  pairSums(pairs, &source, GradientSums{}, sums,
-           [](std::size_t, std::uint32_t, const Vec3& g, GradientSums& own, GradientSums* other) {
-             const double sq = g.squaredNorm();
-             own.g += g;
-             own.sq += sq;
-             ++own.count;
-             if (other) {
-               other->g -= g;
-               other->sq += sq;
-               ++other->count;
-             }
-           });
+  pairSums(
+      pairs, &source, GradientSums{}, sums,
+      [x](std::size_t i, std::uint32_t j, const Vec3& g, GradientSums& own, GradientSums* other) {
+        const double sq = g.squaredNorm();
+        const Vec3 d = x[j] - x[i];
+        own.g += g;
+        own.sq += sq;
+        own.offset += sq * d;
+        ++own.count;
+        if (other) {
+          other->g -= g;
+          other->sq += sq;
+          other->offset -= sq * d;
+          ++other->count;
+        }
+      });
   // A particle with (almost) no neighbours has no pressure to find.
   const double h = kernel.smoothingLength();
   const double scale = m * std::abs(kernel.derivativeOverR(h)) * h;
   const double eps = 1e-6 * scale * scale;
   factor_.resize(n);
   sparse_.resize(n);
+  weight_.resize(n);
+  centre_.resize(n);
   // Fewer than 3/4 of a resting particle's neighbours (fluid and wall samples): a splash,
   // whose rate of compression says little (SPlisHSPlasH's 20 of ~26 at this support).
   const std::uint32_t enough =
@@ -143,22 +150,24 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const std::vector<Vec3>& 
   const std::int64_t sn = static_cast<std::int64_t>(n);
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < sn; ++i) {
-    // s_a's own push: -s_a (sum_b g_ab + 2 G_a); the change of D_a it makes:
-    // -s_a [(sum_b g_ab + 2 G_a) . (sum_b g_ab + G_a) + sum_b |g_ab|^2].
-    const Vec3 wall = boundary_gradient_ ? (*boundary_gradient_)[i] : Vec3(Vec3::Zero());
+    // s_a's own push: -s_a (sum_b g_ab + 3/2 G_a) (its own half of s^w_a); the change of
+    // D_a it makes: -s_a [(sum_b g_ab + G_a) . (sum_b g_ab + 3/2 G_a) + sum_b |g_ab|^2].
+    const Vec3 wall = walls ? boundary.gradient[i] : Vec3(Vec3::Zero());
     const Vec3 g = sums[i].g + wall;
-    const double denominator = std::max(g.dot(g + wall), 0.0) + sums[i].sq;
+    const double denominator = std::max(g.dot(g + 0.5 * wall), 0.0) + sums[i].sq;
     factor_[i] = denominator > eps ? 1.0 / denominator : 0.0;
-    const std::uint32_t around =
-        sums[i].count + (boundary_neighbors.empty() ? 0u : boundary_neighbors[i]);
+    const std::uint32_t around = sums[i].count + (walls ? boundary.neighbors[i] : 0u);
     sparse_[i] = around < enough;
+    weight_[i] = sums[i].sq;
+    // The fluid around a, a itself weighing as much as its neighbours together.
+    centre_[i] = sums[i].sq > 0.0 ? Vec3(0.5 / sums[i].sq * sums[i].offset) : Vec3(Vec3::Zero());
   }
-  impulse_.assign(n, 0.0);  // a new step
+  wall_impulse_.assign(n, 0.0);  // a new step
+  lift_.assign(n, 0.0);
   rates_fresh_ = false;
 }
 
-void DivergenceFreeSolver::densityRates(const Fluid& fluid,
-                                        const std::vector<double>& boundary_flux) {
+void DivergenceFreeSolver::densityRates(const Fluid& fluid) {
   const FluidState& st = fluid.state();
   const Vec3* v = st.velocity.data();
   pairSums(fluid.neighbors(), 0.0, rate_,
@@ -167,40 +176,61 @@ void DivergenceFreeSolver::densityRates(const Fluid& fluid,
              own += t;
              if (other) *other += t;
            });
+  if (!boundary_) return;
   const std::int64_t n = static_cast<std::int64_t>(st.size());
-  const bool flux = !boundary_flux.empty();
-  if (!boundary_gradient_ && !flux) return;
+  const SolverBoundary& b = *boundary_;
 #pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < n; ++i) {
-    if (boundary_gradient_) rate_[i] += v[i].dot((*boundary_gradient_)[i]);
-    if (flux) rate_[i] -= boundary_flux[i];
-  }
+  for (std::int64_t i = 0; i < n; ++i)
+    rate_[i] += v[i].dot(b.gradient[i]) - b.flux[i];
 }
 
 void DivergenceFreeSolver::applyImpulse(Fluid& fluid) {
   FluidState& st = fluid.state();
   const double* ds = ds_.data();
-  pairSums(fluid.neighbors(), Vec3(Vec3::Zero()), dv_,
-           [ds](std::size_t i, std::uint32_t j, const Vec3& g, Vec3& own, Vec3* other) {
+  const bool walls = boundary_ != nullptr;
+  pairSums(fluid.neighbors(), PairChange{}, change_,
+           [ds, walls](std::size_t i, std::uint32_t j, const Vec3& g, PairChange& own,
+                       PairChange* other) {
              const double c = ds[i] + ds[j];
-             if (c == 0.0) return;
+             if (c == 0.0) return;  // (s >= 0: both are zero)
              const Vec3 f = c * g;
-             own -= f;
-             if (other) *other += f;
+             own.dv -= f;
+             if (other) other->dv += f;
+             if (!walls) return;
+             const double w = g.squaredNorm();
+             own.weighted += w * ds[j];
+             if (other) other->weighted += w * ds[i];
            });
   const std::int64_t n = static_cast<std::int64_t>(st.size());
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
-    Vec3 change = dv_[i];
-    if (boundary_gradient_) change -= (2.0 * ds_[i]) * (*boundary_gradient_)[i];
+    Vec3 change = change_[i].dv;
+    if (walls) {
+      // s_a + s^w_a: a's own and the mean of the fluid's around it.
+      const double around = weight_[i] > 0.0 ? change_[i].weighted / weight_[i] : ds_[i];
+      const double wall = 1.5 * ds_[i] + 0.5 * around;
+      change -= wall * boundary_->gradient[i];
+      wall_impulse_[i] += wall;
+    }
     st.velocity[i] += change;
     s_[i] += ds_[i];
-    impulse_[i] += ds_[i];
   }
 }
 
-int DivergenceFreeSolver::solveDivergence(Fluid& fluid, const std::vector<double>& boundary_flux,
-                                          double dt) {
+void DivergenceFreeSolver::applyHydrostatic(Fluid& fluid, const Vec3& gravity, double dt) {
+  if (!boundary_) return;
+  FluidState& st = fluid.state();
+  const SolverBoundary& b = *boundary_;
+  const double inv_rho0 = 1.0 / fluid.params().rest_density;
+  const std::int64_t n = static_cast<std::int64_t>(st.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i) {
+    lift_[i] = std::max(0.0, -gravity.dot(centre_[i]));
+    st.velocity[i] -= dt * (b.hydrostatic[i] + (lift_[i] * inv_rho0) * b.gradient[i]);
+  }
+}
+
+int DivergenceFreeSolver::solveDivergence(Fluid& fluid, double dt) {
   const std::size_t n = fluid.state().size();
   stats_.divergence_iterations = 0;
   stats_.divergence_error = 0.0;
@@ -216,7 +246,7 @@ int DivergenceFreeSolver::solveDivergence(Fluid& fluid, const std::vector<double
   ds_.resize(n);
   int iterations = 0;
   for (;;) {
-    densityRates(fluid, boundary_flux);
+    densityRates(fluid);
     // Each particle's pressure grows by what removes its own compression rate; a particle
     // with too few neighbours for a reliable rate (a splash) is left alone.
     const double error = scale * chunkedSum(n, [&](std::size_t i) {
@@ -235,8 +265,7 @@ int DivergenceFreeSolver::solveDivergence(Fluid& fluid, const std::vector<double
   return iterations;
 }
 
-int DivergenceFreeSolver::solveDensity(Fluid& fluid, const std::vector<double>& boundary_flux,
-                                       double dt) {
+int DivergenceFreeSolver::solveDensity(Fluid& fluid, const Vec3& gravity, double dt) {
   FluidState& st = fluid.state();
   const std::size_t n = st.size();
   stats_.density_iterations = 0;
@@ -250,7 +279,7 @@ int DivergenceFreeSolver::solveDensity(Fluid& fluid, const std::vector<double>& 
   // Warm start: half the last step's pressure (s = dt p / rho^2) where the fluid would be
   // compressed at the step's end with the velocities of its start (the divergence solve's
   // rates); the iterations only add pressure, so this is how it falls.
-  if (!rates_fresh_) densityRates(fluid, boundary_flux);
+  if (!rates_fresh_) densityRates(fluid);
   rates_fresh_ = false;
   const double any = chunkedSum(n, [&](std::size_t i) {
     const double rho = st.density[i];
@@ -259,10 +288,11 @@ int DivergenceFreeSolver::solveDensity(Fluid& fluid, const std::vector<double>& 
     return ds_[i] > 0.0 ? 1.0 : 0.0;
   });
   if (any > 0.0) applyImpulse(fluid);
+  applyHydrostatic(fluid, gravity, dt);
   const double scale = 1.0 / (double(n) * rho0);
   int iterations = 0;
   for (;;) {
-    densityRates(fluid, boundary_flux);
+    densityRates(fluid);
     // Each particle's pressure grows by what removes its own compression at the step's end.
     const double error = scale * chunkedSum(n, [&](std::size_t i) {
                            const double excess =

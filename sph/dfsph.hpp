@@ -11,17 +11,31 @@
 // v_k), the rate of change of particle a's density is
 //   D_a = sum_b (v_a - v_b) . g_ab + v_a . G_a - B_a.
 // A pressure term s (= dt p / rho^2, m^5 / (kg s)) changes velocities by
-//   dv_a = -sum_b (s_a + s_b) g_ab - s_a G_a
-// (the symmetric SPH pressure force over one step; the walls mirror the particle's own
-// pressure), and s_a alone changes D_a by -s_a / a_a, with the factor
-//   a_a = 1 / (|sum_b g_ab + G_a|^2 + sum_b |g_ab|^2).
+//   dv_a = -sum_b (s_a + s_b) g_ab - (s_a + s^w_a) G_a,
+// the symmetric SPH pressure force over one step, with the walls' samples at the pressure
+// of the fluid around them (as the weakly compressible walls, Boundaries::addWallPressure):
+// s^w_a = (s_a + sum_b w_ab s_b / sum_b w_ab) / 2, w_ab = |g_ab|^2. A sample that mirrored
+// the particle's own pressure alone (s^w_a = s_a) left a particle pressed against a wall
+// by its neighbours with no push back whenever its own density was low (a wall layer, a
+// tank's edges): the fluid's pressure drove it into the wall each step, the velocity
+// control stopped it there, and a column at rest kept moving at 0.03-0.05 m/s.
+// Its own s_a changes D_a by about -s_a / a_a, with the factor
+//   a_a = 1 / ((sum_b g_ab + G_a) . (sum_b g_ab + 3/2 G_a) + sum_b |g_ab|^2).
 // Each iteration raises s_a by what removes particle a's own compression (never lowers it:
 // no pull) and applies all of them at once. The density solve starts from half the last
 // step's pressure where the fluid is compressed (warm start, as SPlisHSPlasH does), so a
 // column at rest needs few iterations and a pressure no longer needed fades.
 //
-// The walls' and bodies' side of the impulse (s_a G_a) is the fluid's pressure force on them:
-// impulse() gives it per particle for the coupling (Boundaries::addSolverReaction).
+// Under gravity the samples' pressure also has the fluid's weight between them and the fluid
+// around the particle (the hydrostatic part of the walls' pressure, as
+// Boundaries::computeSamplePressure): once per density solve,
+//   dv_a = -dt (H_a + max(0, -g . c_a) G_a / rho0),
+// H_a = sum_k V_k max(0, g . (x_k - x_a)) grad_a W_ak (SolverBoundary::hydrostatic) and c_a
+// the centre of the fluid around a, relative to it, with the same weights as s^w_a.
+//
+// The walls' and bodies' side of the impulse is the fluid's pressure force on them:
+// wallImpulse() and wallLift() give it per particle for the coupling
+// (Boundaries::addSolverReaction).
 //
 // Sums run over the pair lists in the order of each particle's whole neighbour list, and the
 // error norms in fixed chunks: the same bits on any number of threads.
@@ -55,6 +69,17 @@ struct DfsphStats {
   double divergence_error = 0;  ///< the divergence solve's last average error (fraction)
 };
 
+/// The walls' and bodies' part of the solves, per fluid particle (all empty: no boundary;
+/// Boundaries::solverTerms fills them).
+struct SolverBoundary {
+  std::vector<Vec3> gradient;  ///< (n) G_a = rho0 sum_k V_k grad_a W_ak (kg/m^4)
+  std::vector<double> flux;    ///< (n) B_a = rho0 sum_k V_k v_k . grad_a W_ak (kg/(m^3 s))
+  std::vector<std::uint32_t> neighbors;  ///< (n) samples within the kernel support
+  /// (n) H_a = sum_k V_k max(0, g . (x_k - x_a)) grad_a W_ak (m/s^2): the weight of the fluid
+  /// between a and the samples below it.
+  std::vector<Vec3> hydrostatic;
+};
+
 class DivergenceFreeSolver {
  public:
   explicit DivergenceFreeSolver(const DfsphParams& params) : params_(params) {}
@@ -63,24 +88,24 @@ class DivergenceFreeSolver {
 
   /// After the neighbour lists and the densities (with the boundary's share) of this step:
   /// each pair's mass-weighted kernel gradient g_ab and each particle's factor a_a.
-  /// `boundary_gradient` (n): G_a (kg/m^4), and `boundary_neighbors` (n): the wall samples
-  /// within the support of each particle; both may be empty (no boundary).
-  void prepare(const Fluid& fluid, const std::vector<Vec3>& boundary_gradient,
-               const std::vector<std::uint32_t>& boundary_neighbors);
+  /// `boundary` must outlive the step's solves.
+  void prepare(const Fluid& fluid, const SolverBoundary& boundary);
 
-  /// The divergence solve on the fluid's velocities. `boundary_flux` (n or empty): B_a
-  /// (kg/(m^3 s)); `dt` (s) only scales the error measure (the step's size is not yet
-  /// known: the last one). Returns the iterations taken.
-  int solveDivergence(Fluid& fluid, const std::vector<double>& boundary_flux, double dt);
+  /// The divergence solve on the fluid's velocities; `dt` (s) only scales the error measure
+  /// (the step's size is not yet known: the last one). Returns the iterations taken.
+  int solveDivergence(Fluid& fluid, double dt);
 
   /// The density solve on the predicted velocities v* (the fluid's velocities) for a step
-  /// of `dt`, starting from the state's pressure (the last step's); writes the pressure it
-  /// found, p = rho^2 s / dt, to the state. Returns the iterations taken.
-  int solveDensity(Fluid& fluid, const std::vector<double>& boundary_flux, double dt);
+  /// of `dt` under `gravity`, starting from the state's pressure (the last step's); writes
+  /// the pressure it found, p = rho^2 s / dt, to the state. Returns the iterations taken.
+  int solveDensity(Fluid& fluid, const Vec3& gravity, double dt);
 
-  /// (n) The sum of s over this step's solves (prepare() clears it): the walls' and
-  /// bodies' share of particle a's velocity change was -impulse[a] G_a.
-  const std::vector<double>& impulse() const { return impulse_; }
+  /// (n) The sum of s_a + s^w_a over this step's solves (prepare() clears it): the walls'
+  /// and bodies' pressure share of particle a's velocity change was -wallImpulse[a] G_a.
+  const std::vector<double>& wallImpulse() const { return wall_impulse_; }
+  /// (n) max(0, -g . c_a) of this step's density solve (m^2/s^2; zero without one): with
+  /// H_a, the hydrostatic share of a's velocity change was -dt (H_a + wallLift[a] G_a / rho0).
+  const std::vector<double>& wallLift() const { return lift_; }
 
   const DfsphStats& stats() const { return stats_; }
 
@@ -100,9 +125,11 @@ class DivergenceFreeSolver {
   void pairSums(const PairLists& pairs, const GradientSource* fill, const T& zero,
                 std::vector<T>& sum, Term&& term);
   /// D_a (rate of change of density) of every particle into rate_.
-  void densityRates(const Fluid& fluid, const std::vector<double>& boundary_flux);
-  /// Applies the increments ds_ (s per particle) to the velocities and to impulse_.
+  void densityRates(const Fluid& fluid);
+  /// Applies the increments ds_ (s per particle) to the velocities and to s_, wall_impulse_.
   void applyImpulse(Fluid& fluid);
+  /// The hydrostatic part of the walls' pressure (see above) on the velocities, into lift_.
+  void applyHydrostatic(Fluid& fluid, const Vec3& gravity, double dt);
   /// sum over i of f(i), in fixed chunks (the same bits on any number of threads).
   template <class F>
   static double chunkedSum(std::size_t n, F&& f);
@@ -112,15 +139,23 @@ class DivergenceFreeSolver {
   /// Per range of the pair lists: g_ab (3 floats per pair) in the order of the later and
   /// the before lists.
   std::vector<std::vector<float>> later_grad_, before_grad_;
-  const std::vector<Vec3>* boundary_gradient_ = nullptr;
-  std::vector<double> factor_;        ///< (n) a_a (m^8 / kg^2)
-  std::vector<std::uint8_t> sparse_;  ///< (n) too few neighbours for the divergence solve
-  std::vector<double> rate_;          ///< (n) D_a
-  bool rates_fresh_ = false;          ///< rate_ is of the velocities as they are
-  std::vector<double> s_;             ///< (n) this solve's s so far
-  std::vector<double> ds_;            ///< (n) this iteration's increment of s
-  std::vector<Vec3> dv_;              ///< (n) velocity change of the pair terms
-  std::vector<double> impulse_;       ///< (n) sum of s over the step's solves
+  const SolverBoundary* boundary_ = nullptr;  ///< null: no boundary
+  std::vector<double> factor_;                ///< (n) a_a (m^8 / kg^2)
+  std::vector<std::uint8_t> sparse_;          ///< (n) too few neighbours for the divergence solve
+  std::vector<double> weight_;                ///< (n) sum_b w_ab (with a boundary)
+  std::vector<Vec3> centre_;                  ///< (n) c_a (m, with a boundary)
+  std::vector<double> rate_;                  ///< (n) D_a
+  bool rates_fresh_ = false;                  ///< rate_ is of the velocities as they are
+  std::vector<double> s_;                     ///< (n) this solve's s so far
+  std::vector<double> ds_;                    ///< (n) this iteration's increment of s
+  /// Per particle: the pair terms' velocity change and sum_b w_ab ds_b of one iteration.
+  struct PairChange {
+    Vec3 dv = Vec3::Zero();
+    double weighted = 0.0;
+  };
+  std::vector<PairChange> change_;
+  std::vector<double> wall_impulse_;  ///< (n) sum of s_a + s^w_a over the step's solves
+  std::vector<double> lift_;          ///< (n) max(0, -g . c_a) of the density solve
 };
 
 }  // namespace wake

@@ -104,10 +104,11 @@ struct Floating {
 /// fluid (or, `placed`, started at rest at its Archimedes draft: the fluid where it
 /// stands is left out), settled for `end` seconds.
 Floating floatBox(double density_ratio, CouplingMethod method, double end, double slip = 0.0,
-                  bool placed = false) {
+                  bool placed = false, FluidSolver solver = FluidSolver::Wcsph) {
   const Vec3 size(0.32, 0.30, 0.18), half(0.08, 0.05, 0.07);
   const double depth = 0.15;
   SimulationSettings sim = fluidBox(Vec3(size.x(), depth, size.z()), method);
+  sim.solver = solver;
   const double y =
       placed ? depth - density_ratio * 2 * half.y() + half.y() : depth + half.y() + 0.01;
   std::vector<BodySpec> bodies = {tank(size), box("box", half, density_ratio * 1000.0,
@@ -145,12 +146,13 @@ Floating floatBox(double density_ratio, CouplingMethod method, double end, doubl
   out.max_penetrating = world.simulation().maxPenetrating();
   const double archimedes = density_ratio * 2 * half.y();
   std::printf(
-      "[ buoyancy ] %s density ratio %.2f %s: draft %.4f m, Archimedes %.4f m (%+.1f%%); "
+      "[ buoyancy ] %s%s density ratio %.2f %s: draft %.4f m, Archimedes %.4f m (%+.1f%%); "
       "from the particles' top %.4f m (%+.1f%%); tilt %.3f rad, bottom %.4f m, "
       "max_penetrating %zu\n",
-      name(method), density_ratio, placed ? "placed" : "dropped", out.draft, archimedes,
-      100.0 * (out.draft / archimedes - 1.0), out.surface_draft,
-      100.0 * (out.surface_draft / archimedes - 1.0), out.tilt, out.bottom, out.max_penetrating);
+      solver == FluidSolver::Dfsph ? "dfsph " : "", name(method), density_ratio,
+      placed ? "placed" : "dropped", out.draft, archimedes, 100.0 * (out.draft / archimedes - 1.0),
+      out.surface_draft, 100.0 * (out.surface_draft / archimedes - 1.0), out.tilt, out.bottom,
+      out.max_penetrating);
   return out;
 }
 
@@ -182,6 +184,20 @@ INSTANTIATE_TEST_SUITE_P(Ratios, Buoyancy,
                            return std::string(name(std::get<1>(param.param))) + "_density_" +
                                   std::to_string(percent);
                          });
+
+/// The divergence-free solver under the same box (local control). Disabled: the box floats
+/// too high (drafts -12 %, -8 %, -7 % at ratios 0.3, 0.5, 0.7; 84 s on two threads): the
+/// solver's pressure at rest carries a share of its own (a column's is 5-7 % above
+/// rho g h, Solvers.HydrostaticPressure...), and the box meets it. Run it with
+/// --gtest_also_run_disabled_tests.
+TEST(BuoyancyDfsph, DISABLED_FloatsFlatAtTheArchimedesDraft) {
+  for (double ratio : {0.3, 0.5, 0.7}) {
+    const Floating f = floatBox(ratio, CouplingMethod::Local, 2.0, 0.0, false, FluidSolver::Dfsph);
+    EXPECT_NEAR(f.draft, ratio * 0.10, 0.03 * ratio * 0.10) << ratio;
+    EXPECT_LT(f.tilt, 0.1) << ratio;
+    EXPECT_EQ(f.max_penetrating, 0u) << ratio;
+  }
+}
 
 /// Dropped onto the fluid, a box denser than the fluid sinks until it rests on the last
 /// layer of particles: the walls' pressure term holds the layer at a wall at the fluid's

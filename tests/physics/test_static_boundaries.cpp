@@ -53,10 +53,10 @@ std::string solverName(const ::testing::TestParamInfo<FluidSolver>& info) {
 INSTANTIATE_TEST_SUITE_P(, Solvers, ::testing::Values(FluidSolver::Wcsph, FluidSolver::Dfsph),
                          solverName);
 
-TEST(Hydrostatic, PressureGrowsLinearlyWithDepthAndFluidRests) {
+TEST_P(Solvers, HydrostaticPressureGrowsLinearlyWithDepthAndFluidRests) {
   const double r = 0.005, height = 0.25;
-  SimulationSettings s =
-      tankScene(Vec3(0.08, 0.3, 0.08), {Vec3::Zero(), Vec3(0.08, height, 0.08), Vec3::Zero()}, r);
+  SimulationSettings s = withSolver(
+      tankScene(Vec3(0.08, 0.3, 0.08), {Vec3::Zero(), Vec3(0.08, height, 0.08), Vec3::Zero()}, r));
   Simulation sim(s);
   const std::size_t n0 = sim.fluidParticles();
   runWithoutPenetration(sim, 1.5);
@@ -103,6 +103,11 @@ TEST(Hydrostatic, PressureGrowsLinearlyWithDepthAndFluidRests) {
       layers[layer].second += 1;
     }
   }
+  // 5 % (WCSPH measures 1-2 %). The divergence-free solver's pressure at rest carries a
+  // share of its own (it corrects each step's compression of the residual motion within
+  // the step, and only pushes): 5-7 % above rho g h here (45-130 Pa), so 12 % for it, a
+  // known limit (README, "Choosing a solver").
+  const double tolerance = dfsph() ? 0.12 : 0.05;
   int checked = 0;
   for (const auto& [layer, acc] : layers) {
     const double y = (layer + 0.5) * 2 * r;
@@ -112,11 +117,19 @@ TEST(Hydrostatic, PressureGrowsLinearlyWithDepthAndFluidRests) {
     std::printf(
         "[ hydrostatic ] depth %.3f m: rho g h = %8.1f Pa, p - rho g h = %7.1f Pa (%+.1f%%)\n",
         depth, rho0 * g * depth, error, 100.0 * error / (rho0 * g * depth));
-    EXPECT_LT(std::abs(error), 0.05 * rho0 * g * depth)
+    EXPECT_LT(std::abs(error), tolerance * rho0 * g * depth)
         << "depth " << depth << ": p - rho g h = " << error << " Pa";
     ++checked;
   }
   EXPECT_GE(checked, 10);
+  // The divergence-free solver holds the water at the rest density: over the whole run no
+  // step's average compression above 0.1 %.
+  std::printf("[ hydrostatic ] %s: average compression %.4f %%, worst step %.4f %%\n",
+              dfsph() ? "dfsph" : "wcsph", 100.0 * sim.averageDensityError(),
+              100.0 * sim.maxStepDensityError());
+  if (dfsph()) {
+    EXPECT_LT(sim.maxStepDensityError(), 1e-3);
+  }
 }
 
 TEST(Hydrostatic, StillWaterInATankThatDoesNotFitTheLatticeStaysCalm) {

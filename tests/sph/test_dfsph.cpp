@@ -12,6 +12,8 @@ using namespace wake;
 
 namespace {
 
+const SolverBoundary kNoBoundary;  // no walls
+
 FluidParams solverFluid() {
   FluidParams p;
   p.particle_radius = 0.01;
@@ -66,9 +68,9 @@ TEST(Dfsph, DensitySolveBringsACompressedBlockToRestDensityWithoutMomentum) {
   DfsphParams params;
   params.max_iterations = 1000;
   DivergenceFreeSolver solver(params);
-  solver.prepare(fluid, {}, {});
+  solver.prepare(fluid, kNoBoundary);
   const double dt = 1e-3;
-  const int iterations = solver.solveDensity(fluid, {}, dt);
+  const int iterations = solver.solveDensity(fluid, Vec3::Zero(), dt);
   std::printf("[ dfsph ] compression %.4f before, %d iterations, predicted error %.2e\n", before,
               iterations, solver.stats().density_error);
   EXPECT_GT(before, 0.03);
@@ -111,10 +113,10 @@ TEST(Dfsph, DivergenceSolveStopsAConvergingFlow) {
   DfsphParams params;
   params.max_divergence_iterations = 1000;
   DivergenceFreeSolver solver(params);
-  solver.prepare(fluid, {}, {});
+  solver.prepare(fluid, kNoBoundary);
   const double dt = 1e-3;
   // The error measure of a converging flow before the solve: dt * (-div v) * rho / rho0.
-  const int iterations = solver.solveDivergence(fluid, {}, dt);
+  const int iterations = solver.solveDivergence(fluid, dt);
   std::printf("[ dfsph ] divergence solve: %d iterations, error %.2e\n", iterations,
               solver.stats().divergence_error);
   EXPECT_GT(iterations, 1);
@@ -158,10 +160,10 @@ TEST(Dfsph, SameBitsOnOneAndTwoThreads) {
     fluid.updateNeighbors();
     fluid.computeFluidDensity();
     DivergenceFreeSolver solver{DfsphParams{}};
-    solver.prepare(fluid, {}, {});
-    solver.solveDivergence(fluid, {}, 1e-3);
+    solver.prepare(fluid, kNoBoundary);
+    solver.solveDivergence(fluid, 1e-3);
     const int divergence = solver.stats().divergence_iterations;
-    solver.solveDensity(fluid, {}, 1e-3);
+    solver.solveDensity(fluid, Vec3::Zero(), 1e-3);
     stats = solver.stats();
     stats.divergence_iterations = divergence;
     // In id order (the slots are the grid's order, the same on any number of threads).
