@@ -100,7 +100,8 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
     throw std::logic_error("DivergenceFreeSolver::prepare before updateNeighbors");
   const bool walls = !boundary.gradient.empty();
   if (walls && (boundary.gradient.size() != n || boundary.flux.size() != n ||
-                boundary.neighbors.size() != n || boundary.hydrostatic.size() != n))
+                boundary.neighbors.size() != n || boundary.hydrostatic.size() != n ||
+                boundary.hydrostatic_above.size() != n))
     throw std::logic_error("DivergenceFreeSolver::prepare: boundary terms of another size");
   boundary_ = walls ? &boundary : nullptr;
   const std::size_t ranges = pairs.ranges();
@@ -164,6 +165,7 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
   }
   wall_impulse_.assign(n, 0.0);  // a new step
   lift_.assign(n, 0.0);
+  above_.assign(n, 0.0);
   rates_fresh_ = false;
 }
 
@@ -223,10 +225,19 @@ void DivergenceFreeSolver::applyHydrostatic(Fluid& fluid, const Vec3& gravity, d
   const SolverBoundary& b = *boundary_;
   const double inv_rho0 = 1.0 / fluid.params().rest_density;
   const std::int64_t n = static_cast<std::int64_t>(st.size());
+  // Samples above a have less pressure than the fluid around it, by the weight between:
+  // all of it where a's own (last) pressure exceeds the weight of a support's height of
+  // fluid, less where a is near the free surface (never a pull towards a lid or a body's
+  // underside that the fluid barely touches).
+  const double deep = fluid.params().rest_density * gravity.norm() * fluid.kernel().supportRadius();
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
-    lift_[i] = std::max(0.0, -gravity.dot(centre_[i]));
-    st.velocity[i] -= dt * (b.hydrostatic[i] + (lift_[i] * inv_rho0) * b.gradient[i]);
+    const double chi = deep > 0.0 ? std::clamp(st.pressure[i] / deep, 0.0, 1.0) : 0.0;
+    const double l = -gravity.dot(centre_[i]);
+    lift_[i] = l > 0.0 ? l : chi * l;
+    above_[i] = chi;
+    st.velocity[i] -= dt * (b.hydrostatic[i] + chi * b.hydrostatic_above[i] +
+                            (lift_[i] * inv_rho0) * b.gradient[i]);
   }
 }
 

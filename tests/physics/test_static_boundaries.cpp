@@ -103,11 +103,8 @@ TEST_P(Solvers, HydrostaticPressureGrowsLinearlyWithDepthAndFluidRests) {
       layers[layer].second += 1;
     }
   }
-  // 5 % (WCSPH measures 1-2 %). The divergence-free solver's pressure at rest carries a
-  // share of its own (it corrects each step's compression of the residual motion within
-  // the step, and only pushes): 5-7 % above rho g h here (45-130 Pa), so 12 % for it, a
-  // known limit (README, "Choosing a solver").
-  const double tolerance = dfsph() ? 0.12 : 0.05;
+  // Within 5 % for both solvers (measured: WCSPH 1-2 %, DFSPH up to 4 %).
+  const double tolerance = 0.05;
   int checked = 0;
   for (const auto& [layer, acc] : layers) {
     const double y = (layer + 0.5) * 2 * r;
