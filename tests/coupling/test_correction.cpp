@@ -126,6 +126,38 @@ TEST(Correction, FluidInsideABodyMovedOntoItGoesToTheNearestFreeSide) {
   }
 }
 
+TEST(Correction, WithVelocitiesAMovedParticleStopsMovingIntoTheWallsItWasMovedFrom) {
+  // A tank's floor edge along z (walls x = 0 and y = 0): a particle closer than its
+  // radius to both walls, moving into them and along the edge, ends r from both, moving
+  // only along the edge; one moving away from the wall it was moved from keeps its speed;
+  // one clear of the walls keeps position and velocity. Without velocities (WCSPH's
+  // correction) nothing but the positions changes.
+  auto b = std::make_unique<Boundaries>(fluidParams(),
+                                        Aabb{Vec3(-0.1, -0.1, -0.1), Vec3(0.2, 0.2, 0.2)});
+  b->addBody(staticBody("tank", makeTank(Vec3::Zero(), Vec3(0.1, 0.1, 0.1), 4 * kR)));
+  b->finalize();
+  const BodyPlacement at = b->placeAtStart();
+  const std::vector<Vec3> x0 = {Vec3(0.002, 0.003, 0.05), Vec3(0.003, 0.05, 0.05),
+                                Vec3(0.05, 0.05, 0.05)};
+  const std::vector<Vec3> v0 = {Vec3(-0.1, -0.2, 0.3), Vec3(0.1, -0.2, 0.0), Vec3(-0.1, -0.2, 0.3)};
+  const std::vector<std::uint8_t> all(x0.size(), 1);
+  std::vector<Vec3> x = x0, v = v0;
+  EXPECT_EQ(correctPositions(*b, at, x, all, &v), 0u);
+  EXPECT_NEAR(x[0].x(), kR, 1e-9);
+  EXPECT_NEAR(x[0].y(), kR, 1e-9);
+  EXPECT_NEAR(v[0].x(), 0.0, 1e-12);
+  EXPECT_NEAR(v[0].y(), 0.0, 1e-12);
+  EXPECT_EQ(v[0].z(), 0.3);
+  EXPECT_NEAR(x[1].x(), kR, 1e-9);
+  EXPECT_EQ(v[1], v0[1]);
+  EXPECT_EQ(x[2], x0[2]);
+  EXPECT_EQ(v[2], v0[2]);
+  std::vector<Vec3> y = x0;
+  EXPECT_EQ(correctPositions(*b, at, y, all), 0u);
+  for (std::size_t i = 0; i < x.size(); ++i)
+    EXPECT_EQ(y[i], x[i]);
+}
+
 TEST(Correction, ParticlesAwayFromBodiesDoNotMove) {
   const auto b = floorAndBox(0.02, Vec3(0.03, 0.02, 0.03));
   std::vector<Vec3> x = {Vec3(0.1, 0.05, 0), Vec3(0, 0.066, 0), Vec3(0.0, 1.0 * kR, 0.1)};
