@@ -117,25 +117,29 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
     later_grad_[r].resize(3 * used);
     before_grad_[r].resize(3 * pairs.before[r].size());
   }
+  // The particles with samples in their support: the walls' terms are theirs alone.
+  near_wall_.assign(n, 0);
+  if (walls)
+    for (std::size_t i = 0; i < n; ++i)
+      near_wall_[i] = boundary.gradient[i].squaredNorm() > 0.0 ? 1 : 0;
+  const std::uint8_t* near = near_wall_.data();
   const Vec3* x = st.position.data();
   const GradientSource source{x, &kernel, m};
   std::vector<GradientSums> sums;
-  pairSums(
-      pairs, &source, GradientSums{}, sums,
-      [x](std::size_t i, std::uint32_t j, const Vec3& g, GradientSums& own, GradientSums* other) {
-        const double sq = g.squaredNorm();
-        const Vec3 d = x[j] - x[i];
-        own.g += g;
-        own.sq += sq;
-        own.offset += sq * d;
-        ++own.count;
-        if (other) {
-          other->g -= g;
-          other->sq += sq;
-          other->offset -= sq * d;
-          ++other->count;
-        }
-      });
+  pairSums(pairs, &source, GradientSums{}, sums,
+           [x, near](std::size_t i, std::uint32_t j, const Vec3& g, GradientSums& own,
+                     GradientSums* other) {
+             const double sq = g.squaredNorm();
+             own.g += g;
+             own.sq += sq;
+             ++own.count;
+             if (near[i]) own.offset += sq * (x[j] - x[i]);
+             if (!other) return;
+             other->g -= g;
+             other->sq += sq;
+             ++other->count;
+             if (near[j]) other->offset += sq * (x[i] - x[j]);
+           });
   // A particle with (almost) no neighbours has no pressure to find.
   const double h = kernel.smoothingLength();
   const double scale = m * std::abs(kernel.derivativeOverR(h)) * h;
@@ -190,24 +194,26 @@ void DivergenceFreeSolver::applyImpulse(Fluid& fluid) {
   FluidState& st = fluid.state();
   const double* ds = ds_.data();
   const bool walls = boundary_ != nullptr;
+  const std::uint8_t* near = near_wall_.data();
   pairSums(fluid.neighbors(), PairChange{}, change_,
-           [ds, walls](std::size_t i, std::uint32_t j, const Vec3& g, PairChange& own,
-                       PairChange* other) {
+           [ds, near](std::size_t i, std::uint32_t j, const Vec3& g, PairChange& own,
+                      PairChange* other) {
              const double c = ds[i] + ds[j];
              if (c == 0.0) return;  // (s >= 0: both are zero)
              const Vec3 f = c * g;
              own.dv -= f;
              if (other) other->dv += f;
-             if (!walls) return;
+             const bool near_i = near[i], near_j = other && near[j];
+             if (!(near_i || near_j)) return;
              const double w = g.squaredNorm();
-             own.weighted += w * ds[j];
-             if (other) other->weighted += w * ds[i];
+             if (near_i) own.weighted += w * ds[j];
+             if (near_j) other->weighted += w * ds[i];
            });
   const std::int64_t n = static_cast<std::int64_t>(st.size());
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
     Vec3 change = change_[i].dv;
-    if (walls) {
+    if (walls && near_wall_[i]) {
       // s_a + s^w_a: a's own and the mean of the fluid's around it.
       const double around = weight_[i] > 0.0 ? change_[i].weighted / weight_[i] : ds_[i];
       const double wall = 1.5 * ds_[i] + 0.5 * around;

@@ -151,6 +151,7 @@ class DivergenceFreeSolver {
   const SolverBoundary* boundary_ = nullptr;  ///< null: no boundary
   std::vector<double> factor_;                ///< (n) a_a (m^8 / kg^2)
   std::vector<std::uint8_t> sparse_;          ///< (n) too few neighbours for the divergence solve
+  std::vector<std::uint8_t> near_wall_;       ///< (n) G_a != 0: samples in a's support
   std::vector<double> weight_;                ///< (n) sum_b w_ab (with a boundary)
   std::vector<Vec3> centre_;                  ///< (n) c_a (m, with a boundary)
   std::vector<double> rate_;                  ///< (n) D_a
