@@ -39,7 +39,7 @@
 // above, a box of half the water's density floated 8 % too high.
 //
 // The walls' and bodies' side of the impulse is the fluid's pressure force on them:
-// wallImpulse() and wallLift() give it per particle for the coupling
+// wallImpulse(), wallLift() and wallAbove() give it per particle for the coupling
 // (Boundaries::addSolverReaction).
 //
 // Sums run over the pair lists in the order of each particle's whole neighbour list, and the
