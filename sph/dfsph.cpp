@@ -1,5 +1,6 @@
 #include "sph/dfsph.hpp"
 
+#include "sph/lanes.hpp"
 #include "sph/pair_loops.hpp"
 
 #include <omp.h>
@@ -33,44 +34,153 @@ int latticeNeighbors(const FluidParams& f) {
   return count - 1;
 }
 
-Vec3 load(const float* g) {
-  return Vec3(static_cast<double>(g[0]), static_cast<double>(g[1]), static_cast<double>(g[2]));
+/// g_ab = m grad_a W(x_a - x_b) of a's neighbours nb[0 .. count) into g[3 t + c], several
+/// at a time in L (Lanes2, Lanes4: per lane the scalar operations, the same bits).
+template <class L>
+inline void rowGradients(const Vec3& xa, const Vec3* x, const std::uint32_t* nb,
+                         std::uint32_t count, const CubicSplineKernel& kernel, double mass,
+                         double* g) {
+  constexpr int W = L::kWidth;
+  alignas(32) double out[3][W];
+  for (std::uint32_t k = 0; k < count; k += W) {
+    const double* p[W];
+    for (int t = 0; t < W; ++t)
+      p[t] = x[nb[k + t < count ? k + t : count - 1]].data();
+    L xb, yb, zb;
+    gather3Lanes(p, xb, yb, zb);
+    const L dx = L::all(xa.x()) - xb, dy = L::all(xa.y()) - yb, dz = L::all(xa.z()) - zb;
+    const L f = L::all(mass) * kernel.derivativeOverR(sqrt(dx * dx + dy * dy + dz * dz));
+    (f * dx).store(out[0]);
+    (f * dy).store(out[1]);
+    (f * dz).store(out[2]);
+    for (int t = 0; t < W && k + t < count; ++t)
+      for (int c = 0; c < 3; ++c)
+        g[3 * (k + t) + c] = out[c][t];
+  }
 }
+
+/// A row's sums (padded to groups of four; the padding adds zeros) in four partial sums of
+/// Q (Quad2, Lanes4: the same bits): sum_b g_ab, sum_b |g_ab|^2 and, with `near`, sum_b
+/// |g_ab|^2 (x_b - x_a).
+template <class Q>
+inline void rowSums(const std::uint32_t* index, const float* gx, const float* gy, const float* gz,
+                    std::uint32_t k, std::uint32_t e, const Vec3* x, std::size_t a, bool near,
+                    GradientSums& out) {
+  Q sx = Q::all(0.0), sy = sx, sz = sx, sq = sx, ox = sx, oy = sx, oz = sx;
+  const Q xa = Q::all(x[a].x()), ya = Q::all(x[a].y()), za = Q::all(x[a].z());
+  for (std::uint32_t t = k; t < e; t += 4) {
+    const Q u = Q::loadFloats(gx + t), v = Q::loadFloats(gy + t), w = Q::loadFloats(gz + t);
+    const Q s = (u * u + v * v) + w * w;
+    sx = sx + u;
+    sy = sy + v;
+    sz = sz + w;
+    sq = sq + s;
+    if (!near) continue;
+    const std::uint32_t* j = index + t;
+    const double* p[4] = {x[j[0]].data(), x[j[1]].data(), x[j[2]].data(), x[j[3]].data()};
+    Q xb, yb, zb;
+    Q::gather3(p, xb, yb, zb);
+    ox = ox + s * (xb - xa);
+    oy = oy + s * (yb - ya);
+    oz = oz + s * (zb - za);
+  }
+  out.g = Vec3(sx.total(), sy.total(), sz.total());
+  out.sq = sq.total();
+  out.offset = near ? Vec3(ox.total(), oy.total(), oz.total()) : Vec3(Vec3::Zero());
+}
+
+#if defined(WAKE_HAS_LANES4)
+WAKE_TARGET_AVX void rowGradients4(const Vec3& xa, const Vec3* x, const std::uint32_t* nb,
+                                   std::uint32_t count, const CubicSplineKernel& kernel,
+                                   double mass, double* g) {
+  rowGradients<Lanes4>(xa, x, nb, count, kernel, mass, g);
+}
+WAKE_TARGET_AVX void rowSums4(const std::uint32_t* index, const float* gx, const float* gy,
+                              const float* gz, std::uint32_t k, std::uint32_t e, const Vec3* x,
+                              std::size_t a, bool near, GradientSums& out) {
+  rowSums<Lanes4>(index, gx, gy, gz, k, e, x, a, near, out);
+}
+#endif
 
 }  // namespace
 
-template <class T, class Term>
-void DivergenceFreeSolver::pairSums(const PairLists& pairs, const T& zero, std::vector<T>& sum,
-                                    Term&& term) {
-  pairSums(pairs, nullptr, zero, sum, term);
-}
-
-template <class T, class Term>
-void DivergenceFreeSolver::pairSums(const PairLists& pairs, const GradientSource* fill,
-                                    const T& zero, std::vector<T>& sum, Term&& term) {
-  sum.resize(pairs.size());
-  forEachRange(pairs, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
-    const std::uint32_t end = static_cast<std::uint32_t>(i1);
-    forEachListOfRange(
-        pairs, r, i0, i1,
-        [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e, bool later) {
-          float* grad = (later ? later_grad_[r] : before_grad_[r]).data();
-          T own = later ? sum[i] : zero;
-          for (std::uint64_t t = k; t < e; ++t) {
-            const std::uint32_t j = nb[t];
-            if (fill) {
-              const Vec3 d = fill->x[i] - fill->x[j];
-              const Vec3 g =
-                  (fill->mass * fill->kernel->derivativeOverR(std::sqrt(d.squaredNorm()))) * d;
-              for (int c = 0; c < 3; ++c)
-                grad[3 * t + c] = static_cast<float>(g[c]);
-            }
-            term(static_cast<std::size_t>(i), j, load(grad + 3 * t), own,
-                 later && j < end ? &sum[j] : nullptr);
-          }
-          sum[i] = own;
-        });
-  });
+template <class Sums>
+void DivergenceFreeSolver::buildLists(const PairLists& pairs, std::size_t r, const Vec3* x,
+                                      const CubicSplineKernel& kernel, double mass, bool wide,
+                                      Sums* sums) {
+  Lists& L = lists_[r];
+  const std::size_t i0 = pairs.range[r], i1 = pairs.range[r + 1], rows = i1 - i0;
+  const std::vector<std::uint32_t>& before_offset = pairs.before_offset[r];
+  const std::uint32_t* before = pairs.before[r].data();
+  const std::uint32_t* later = pairs.later[r].data();
+  auto earlier = [&](std::size_t q, std::uint32_t& k, std::uint32_t& e) {
+    k = q + 1 < before_offset.size() ? before_offset[q] : 0;
+    e = q + 1 < before_offset.size() ? before_offset[q + 1] : 0;
+  };
+  // Row sizes: the earlier neighbours before the range, those in it (each in the later
+  // list of a lower row), the later ones.
+  L.size.assign(rows, 0);
+  for (std::size_t q = 0; q < rows; ++q) {
+    const std::size_t i = i0 + q;
+    std::uint32_t k, e;
+    earlier(q, k, e);
+    L.size[q] += (e - k) + pairs.count[i];
+    for (std::uint64_t t = pairs.begin[i], te = t + pairs.count[i]; t < te; ++t)
+      if (later[t] < i1) ++L.size[later[t] - i0];
+  }
+  // Rows padded to groups of four (the passes read four pairs at a time).
+  L.offset.resize(rows + 1);
+  L.offset[0] = 0;
+  for (std::size_t q = 0; q < rows; ++q)
+    L.offset[q + 1] = L.offset[q] + ((L.size[q] + 3) & ~std::uint32_t(3));
+  const std::size_t total = L.offset[rows];
+  L.index.resize(total);
+  L.gx.resize(total);
+  L.gy.resize(total);
+  L.gz.resize(total);
+  L.cursor.resize(rows);
+  for (std::size_t q = 0; q < rows; ++q) {
+    std::uint32_t k, e;
+    earlier(q, k, e);
+    L.cursor[q] = L.offset[q] + (e - k);
+  }
+  auto put = [&L](std::uint32_t slot, std::uint32_t j, const double* g, float sign) {
+    L.index[slot] = j;
+    L.gx[slot] = sign * static_cast<float>(g[0]);
+    L.gy[slot] = sign * static_cast<float>(g[1]);
+    L.gz[slot] = sign * static_cast<float>(g[2]);
+  };
+  // g_ab = m grad_a W(x_a - x_b); g_ba = -g_ab bit for bit (x_b - x_a is -(x_a - x_b)
+  // exactly), so a pair in one range is computed once.
+  auto gradients = rowGradients<Lanes2>;
+#if defined(WAKE_HAS_LANES4)
+  if (wide) gradients = rowGradients4;
+#endif
+  std::vector<double>& g = L.scratch;
+  for (std::size_t q = 0; q < rows; ++q) {
+    const std::size_t i = i0 + q;
+    std::uint32_t k, e;
+    earlier(q, k, e);
+    std::uint32_t slot = L.offset[q];
+    g.resize(3 * std::max<std::size_t>(e - k, pairs.count[i]));
+    gradients(x[i], x, before + k, e - k, kernel, mass, g.data());
+    for (std::uint32_t t = k; t < e; ++t)
+      put(slot++, before[t], &g[3 * (t - k)], 1.0f);
+    slot = L.offset[q] + L.size[q] - pairs.count[i];
+    const std::uint32_t* nb = later + pairs.begin[i];
+    gradients(x[i], x, nb, pairs.count[i], kernel, mass, g.data());
+    for (std::uint32_t t = 0; t < pairs.count[i]; ++t) {
+      const std::uint32_t j = nb[t];
+      put(slot++, j, &g[3 * t], 1.0f);
+      if (j < i1) put(L.cursor[j - i0]++, static_cast<std::uint32_t>(i), &g[3 * t], -1.0f);
+    }
+    // The padding: the particle itself with g = 0 (adds zeros).
+    const double zero[3] = {0.0, 0.0, 0.0};
+    for (; slot < L.offset[q + 1]; ++slot)
+      put(slot, static_cast<std::uint32_t>(i), zero, 1.0f);
+    // Row q is whole: the earlier rows of the range have written their pairs into it.
+    if (sums) (*sums)(i, L, q);
+  }
 }
 
 template <class F>
@@ -104,19 +214,6 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
                 boundary.hydrostatic_above.size() != n))
     throw std::logic_error("DivergenceFreeSolver::prepare: boundary terms of another size");
   boundary_ = walls ? &boundary : nullptr;
-  const std::size_t ranges = pairs.ranges();
-  later_grad_.resize(ranges);
-  before_grad_.resize(ranges);
-  const CubicSplineKernel& kernel = fluid.kernel();
-  const double m = fluid.particleMass();
-  // g_ab = m grad_a W(x_a - x_b), for each list from its own point's side (g_ba = -g_ab
-  // bit for bit: x_b - x_a is -(x_a - x_b) exactly), stored as the factor's sums read them.
-  for (std::size_t r = 0; r < ranges; ++r) {
-    const std::size_t i0 = pairs.range[r], i1 = pairs.range[r + 1];
-    const std::size_t used = i1 > i0 ? pairs.begin[i1 - 1] + pairs.count[i1 - 1] : 0;
-    later_grad_[r].resize(3 * used);
-    before_grad_[r].resize(3 * pairs.before[r].size());
-  }
   // The particles with samples in their support: the walls' terms are theirs alone.
   near_wall_.assign(n, 0);
   if (walls)
@@ -124,27 +221,28 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
       near_wall_[i] = boundary.gradient[i].squaredNorm() > 0.0 ? 1 : 0;
   const std::uint8_t* near = near_wall_.data();
   const Vec3* x = st.position.data();
-  const GradientSource source{x, &kernel, m};
-  std::vector<GradientSums> sums;
-  pairSums(pairs, &source, GradientSums{}, sums,
-           [x, near](std::size_t i, std::uint32_t j, const Vec3& g, GradientSums& own,
-                     GradientSums* other) {
-             const double sq = g.squaredNorm();
-             own.g += g;
-             own.sq += sq;
-             ++own.count;
-             if (near[i]) own.offset += sq * (x[j] - x[i]);
-             if (!other) return;
-             other->g -= g;
-             other->sq += sq;
-             ++other->count;
-             if (near[j]) other->offset += sq * (x[i] - x[j]);
-           });
+  lists_.resize(pairs.ranges());
+  std::vector<GradientSums> sums(n);
+  auto sum_row = rowSums<Quad2>;
+#if defined(WAKE_HAS_LANES4)
+  if (fluid.wideLanes()) sum_row = rowSums4;
+#endif
+  auto row_sums = [&sums, x, near, sum_row](std::size_t i, const Lists& L, std::size_t q) {
+    sum_row(L.index.data(), L.gx.data(), L.gy.data(), L.gz.data(), L.offset[q], L.offset[q + 1], x,
+            i, near[i] != 0, sums[i]);
+    sums[i].count = L.size[q];
+  };
+  forEachRange(pairs, [&](std::int64_t, std::int64_t, std::size_t r) {
+    buildLists(pairs, r, x, fluid.kernel(), fluid.particleMass(), fluid.wideLanes(), &row_sums);
+  });
+  const CubicSplineKernel& kernel = fluid.kernel();
+  const double m = fluid.particleMass();
   // A particle with (almost) no neighbours has no pressure to find.
   const double h = kernel.smoothingLength();
   const double scale = m * std::abs(kernel.derivativeOverR(h)) * h;
   const double eps = 1e-6 * scale * scale;
   factor_.resize(n);
+  grad_sum_.resize(n);
   sparse_.resize(n);
   weight_.resize(n);
   centre_.resize(n);
@@ -158,6 +256,7 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
     // s_a's own push: -s_a (sum_b g_ab + 3/2 G_a) (its own half of s^w_a); the change of
     // D_a it makes: -s_a [(sum_b g_ab + G_a) . (sum_b g_ab + 3/2 G_a) + sum_b |g_ab|^2].
     const Vec3 wall = walls ? boundary.gradient[i] : Vec3(Vec3::Zero());
+    grad_sum_[i] = sums[i].g;
     const Vec3 g = sums[i].g + wall;
     const double denominator = std::max(g.dot(g + 0.5 * wall), 0.0) + sums[i].sq;
     factor_[i] = denominator > eps ? 1.0 / denominator : 0.0;
@@ -173,46 +272,132 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
   rates_fresh_ = false;
 }
 
+namespace {
+
+/// One range's lists as the passes read them.
+struct RowView {
+  const std::uint32_t *offset, *index;
+  const float *gx, *gy, *gz;
+};
+
+/// The density rates D_a of the particles [i0, i1) (one range), four pairs at a time in
+/// Q (Quad2 or Lanes4: the same bits): D_a = v_a . sum_b g_ab - sum_b v_b . g_ab, plus the
+/// walls' v_a . G_a - B_a where `wall_gradient` is not null.
+template <class Q>
+inline void ratesRange(std::int64_t i0, std::int64_t i1, const RowView& L, const Vec3* v,
+                       const Vec3* grad_sum, const Vec3* wall_gradient, const double* flux,
+                       double* rate) {
+  for (std::int64_t i = i0; i < i1; ++i) {
+    const std::size_t q = static_cast<std::size_t>(i - i0);
+    Q sum = Q::all(0.0);
+    for (std::uint32_t t = L.offset[q]; t < L.offset[q + 1]; t += 4) {
+      const std::uint32_t* j = L.index + t;
+      const double* p[4] = {v[j[0]].data(), v[j[1]].data(), v[j[2]].data(), v[j[3]].data()};
+      Q vx, vy, vz;
+      Q::gather3(p, vx, vy, vz);
+      sum = sum + ((vx * Q::loadFloats(L.gx + t) + vy * Q::loadFloats(L.gy + t)) +
+                   vz * Q::loadFloats(L.gz + t));
+    }
+    double d = v[i].dot(grad_sum[i]) - sum.total();
+    if (wall_gradient) d += v[i].dot(wall_gradient[i]) - flux[i];
+    rate[i] = d;
+  }
+}
+
+/// The pair part of the velocity change of the particles [i0, i1) for the increments ds:
+/// dv_a = -ds_a sum_b g_ab - sum_b ds_b g_ab, and where near[a], sum_b |g_ab|^2 ds_b into
+/// weighted[a] (no branch on the pairs' values: s is zero at random where the fluid is not
+/// compressed, and a mispredicted branch costs more than the terms).
+template <class Q>
+inline void impulseRange(std::int64_t i0, std::int64_t i1, const RowView& L, const double* ds,
+                         const Vec3* grad_sum, const std::uint8_t* near, Vec3* dv,
+                         double* weighted) {
+  for (std::int64_t i = i0; i < i1; ++i) {
+    const std::size_t q = static_cast<std::size_t>(i - i0);
+    Q sx = Q::all(0.0), sy = sx, sz = sx, sw = sx;
+    const std::uint32_t e = L.offset[q + 1];
+    if (near[i]) {
+      for (std::uint32_t t = L.offset[q]; t < e; t += 4) {
+        const Q s = Q::gather(ds, L.index + t);
+        const Q gx = Q::loadFloats(L.gx + t), gy = Q::loadFloats(L.gy + t),
+                gz = Q::loadFloats(L.gz + t);
+        sx = sx + s * gx;
+        sy = sy + s * gy;
+        sz = sz + s * gz;
+        sw = sw + ((gx * gx + gy * gy) + gz * gz) * s;
+      }
+      weighted[i] = sw.total();
+    } else {
+      for (std::uint32_t t = L.offset[q]; t < e; t += 4) {
+        const Q s = Q::gather(ds, L.index + t);
+        sx = sx + s * Q::loadFloats(L.gx + t);
+        sy = sy + s * Q::loadFloats(L.gy + t);
+        sz = sz + s * Q::loadFloats(L.gz + t);
+      }
+    }
+    dv[i] = -ds[i] * grad_sum[i] - Vec3(sx.total(), sy.total(), sz.total());
+  }
+}
+
+#if defined(WAKE_HAS_LANES4)
+WAKE_TARGET_AVX void ratesRange4(std::int64_t i0, std::int64_t i1, const RowView& L, const Vec3* v,
+                                 const Vec3* grad_sum, const Vec3* wall_gradient,
+                                 const double* flux, double* rate) {
+  ratesRange<Lanes4>(i0, i1, L, v, grad_sum, wall_gradient, flux, rate);
+}
+WAKE_TARGET_AVX void impulseRange4(std::int64_t i0, std::int64_t i1, const RowView& L,
+                                   const double* ds, const Vec3* grad_sum, const std::uint8_t* near,
+                                   Vec3* dv, double* weighted) {
+  impulseRange<Lanes4>(i0, i1, L, ds, grad_sum, near, dv, weighted);
+}
+#endif
+
+}  // namespace
+
+template <class RangeF>
+void DivergenceFreeSolver::forEachRow(const PairLists& pairs, RangeF&& range) {
+  forEachRange(pairs, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
+    const Lists& L = lists_[r];
+    range(i0, i1, RowView{L.offset.data(), L.index.data(), L.gx.data(), L.gy.data(), L.gz.data()});
+  });
+}
+
 void DivergenceFreeSolver::densityRates(const Fluid& fluid) {
   const FluidState& st = fluid.state();
   const Vec3* v = st.velocity.data();
-  pairSums(fluid.neighbors(), 0.0, rate_,
-           [v](std::size_t i, std::uint32_t j, const Vec3& g, double& own, double* other) {
-             const double t = (v[i] - v[j]).dot(g);
-             own += t;
-             if (other) *other += t;
-           });
-  if (!boundary_) return;
-  const std::int64_t n = static_cast<std::int64_t>(st.size());
-  const SolverBoundary& b = *boundary_;
-#pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < n; ++i)
-    rate_[i] += v[i].dot(b.gradient[i]) - b.flux[i];
+  const Vec3* wall = boundary_ ? boundary_->gradient.data() : nullptr;
+  const double* flux = boundary_ ? boundary_->flux.data() : nullptr;
+  rate_.resize(st.size());
+  auto range = ratesRange<Quad2>;
+#if defined(WAKE_HAS_LANES4)
+  if (fluid.wideLanes()) range = ratesRange4;
+#endif
+  forEachRow(fluid.neighbors(), [&](std::int64_t i0, std::int64_t i1, const RowView& L) {
+    range(i0, i1, L, v, grad_sum_.data(), wall, flux, rate_.data());
+  });
 }
 
 void DivergenceFreeSolver::applyImpulse(Fluid& fluid) {
   FluidState& st = fluid.state();
-  const double* ds = ds_.data();
-  pairSums(fluid.neighbors(), PairChange{}, change_,
-           [ds](std::size_t i, std::uint32_t j, const Vec3& g, PairChange& own, PairChange* other) {
-             // No branch on the pair's values: s is zero at random where the fluid is not
-             // compressed, and a mispredicted branch costs more than the terms.
-             const double ds_i = ds[i], ds_j = ds[j];
-             const Vec3 f = (ds_i + ds_j) * g;
-             const double w = g.squaredNorm();
-             own.dv -= f;
-             own.weighted += w * ds_j;
-             if (!other) return;
-             other->dv += f;
-             other->weighted += w * ds_i;
-           });
-  const std::int64_t n = static_cast<std::int64_t>(st.size());
+  const std::size_t n = st.size();
+  // Velocities change once every particle's change is known.
+  change_.resize(n);
+  weighted_.resize(n);
+  auto range = impulseRange<Quad2>;
+#if defined(WAKE_HAS_LANES4)
+  if (fluid.wideLanes()) range = impulseRange4;
+#endif
+  forEachRow(fluid.neighbors(), [&](std::int64_t i0, std::int64_t i1, const RowView& L) {
+    range(i0, i1, L, ds_.data(), grad_sum_.data(), near_wall_.data(), change_.data(),
+          weighted_.data());
+  });
+  const std::int64_t sn = static_cast<std::int64_t>(n);
 #pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < n; ++i) {
-    Vec3 change = change_[i].dv;
+  for (std::int64_t i = 0; i < sn; ++i) {
+    Vec3 change = change_[i];
     if (near_wall_[i]) {
       // s_a + s^w_a: a's own and the mean of the fluid's around it.
-      const double around = weight_[i] > 0.0 ? change_[i].weighted / weight_[i] : ds_[i];
+      const double around = weight_[i] > 0.0 ? weighted_[i] / weight_[i] : ds_[i];
       const double wall = 1.5 * ds_[i] + 0.5 * around;
       change -= wall * boundary_->gradient[i];
       wall_impulse_[i] += wall;

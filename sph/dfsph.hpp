@@ -42,8 +42,8 @@
 // wallImpulse(), wallLift() and wallAbove() give it per particle for the coupling
 // (Boundaries::addSolverReaction).
 //
-// Sums run over the pair lists in the order of each particle's whole neighbour list, and the
-// error norms in fixed chunks: the same bits on any number of threads.
+// Sums run over each particle's whole neighbour list in its order, and the error norms in
+// fixed chunks: the same bits on any number of threads.
 #pragma once
 
 #include "sph/fluid.hpp"
@@ -119,20 +119,23 @@ class DivergenceFreeSolver {
   const DfsphStats& stats() const { return stats_; }
 
  private:
-  /// Pair sums over the lists with the stored gradients: term(i, j, g, own, other) adds
-  /// i's term to own and j's to *other (null when j's sum is not this range's to write).
-  template <class T, class Term>
-  void pairSums(const PairLists& pairs, const T& zero, std::vector<T>& sum, Term&& term);
-  /// Where the pairs' gradients come from when pairSums computes and stores them.
-  struct GradientSource {
-    const Vec3* x;
-    const CubicSplineKernel* kernel;
-    double mass;
+  /// Each particle's whole neighbour list with the pairs' g_ab, per range of the pair lists
+  /// (a range's particles [i0, i1) are its rows q = i - i0): the neighbours of row q,
+  /// ascending, are index[offset[q] .. offset[q + 1]), g_ab the floats (gx, gy, gz) there.
+  /// Each pair is computed once and stored in both lists (g_ba = -g_ab) when both lie in
+  /// one range; the solves' passes then only read (no pair adds to another particle's sum).
+  struct Lists {
+    std::vector<std::uint32_t> offset, index, size, cursor;
+    std::vector<float> gx, gy, gz;
+    std::vector<double> scratch;  ///< one row's gradients as they are computed
   };
-  /// As above; with `fill`, each pair's g_ab is computed from the positions and stored first.
-  template <class T, class Term>
-  void pairSums(const PairLists& pairs, const GradientSource* fill, const T& zero,
-                std::vector<T>& sum, Term&& term);
+  /// Builds range r's lists (and each particle's gradient sums: see prepare()).
+  template <class Sums>
+  void buildLists(const PairLists& pairs, std::size_t r, const Vec3* x,
+                  const CubicSplineKernel& kernel, double mass, bool wide, Sums* sums);
+  /// range(i0, i1, view) for every range of particles [i0, i1) and its lists, in parallel.
+  template <class RangeF>
+  void forEachRow(const PairLists& pairs, RangeF&& range);
   /// D_a (rate of change of density) of every particle into rate_.
   void densityRates(const Fluid& fluid);
   /// Applies the increments ds_ (s per particle) to the velocities and to s_, wall_impulse_.
@@ -145,11 +148,10 @@ class DivergenceFreeSolver {
 
   DfsphParams params_;
   DfsphStats stats_;
-  /// Per range of the pair lists: g_ab (3 floats per pair) in the order of the later and
-  /// the before lists.
-  std::vector<std::vector<float>> later_grad_, before_grad_;
+  std::vector<Lists> lists_;                  ///< (ranges)
   const SolverBoundary* boundary_ = nullptr;  ///< null: no boundary
   std::vector<double> factor_;                ///< (n) a_a (m^8 / kg^2)
+  std::vector<Vec3> grad_sum_;                ///< (n) sum_b g_ab (kg/m^4)
   std::vector<std::uint8_t> sparse_;          ///< (n) too few neighbours for the divergence solve
   std::vector<std::uint8_t> near_wall_;       ///< (n) G_a != 0: samples in a's support
   std::vector<double> weight_;                ///< (n) sum_b w_ab (with a boundary)
@@ -158,15 +160,11 @@ class DivergenceFreeSolver {
   bool rates_fresh_ = false;                  ///< rate_ is of the velocities as they are
   std::vector<double> s_;                     ///< (n) this solve's s so far
   std::vector<double> ds_;                    ///< (n) this iteration's increment of s
-  /// Per particle: the pair terms' velocity change and sum_b w_ab ds_b of one iteration.
-  struct PairChange {
-    Vec3 dv = Vec3::Zero();
-    double weighted = 0.0;
-  };
-  std::vector<PairChange> change_;
-  std::vector<double> wall_impulse_;  ///< (n) sum of s_a + s^w_a over the step's solves
-  std::vector<double> lift_;          ///< (n) l_a of the density solve
-  std::vector<double> above_;         ///< (n) chi_a of the density solve
+  std::vector<Vec3> change_;                  ///< (n) one iteration's velocity change
+  std::vector<double> weighted_;              ///< (n) one iteration's sum_b w_ab ds_b (near walls)
+  std::vector<double> wall_impulse_;          ///< (n) sum of s_a + s^w_a over the step's solves
+  std::vector<double> lift_;                  ///< (n) l_a of the density solve
+  std::vector<double> above_;                 ///< (n) chi_a of the density solve
 };
 
 }  // namespace wake

@@ -30,6 +30,10 @@ struct Lanes2 {
 
   static Lanes2 all(double a) { return {_mm_set1_pd(a)}; }
   static Lanes2 load(const double* p) { return {_mm_loadu_pd(p)}; }
+  /// (p[0], p[1]) of floats, widened (exact).
+  static Lanes2 loadFloats(const float* p) {
+    return {_mm_cvtps_pd(_mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(p))))};
+  }
   void store(double* p) const { _mm_storeu_pd(p, v); }
   /// (a[j0], a[j1]).
   static Lanes2 gather(const double* a, std::uint32_t j0, std::uint32_t j1) {
@@ -92,6 +96,7 @@ struct Lanes2 {
 
   static Lanes2 all(double a) { return {{a, a}}; }
   static Lanes2 load(const double* p) { return {{p[0], p[1]}}; }
+  static Lanes2 loadFloats(const float* p) { return {{double(p[0]), double(p[1])}}; }
   void store(double* p) const {
     p[0] = v[0];
     p[1] = v[1];
@@ -170,6 +175,34 @@ inline void gather3Lanes(const double* const* p, Lanes2& x, Lanes2& y, Lanes2& z
   Lanes2::gather3(p[0], p[1], x, y, z);
 }
 
+/// Four doubles as two Lanes2: the operations of Lanes4 with the same bits, so that a loop
+/// over groups of four terms is written once for both (a sum in four partial sums, one per
+/// position in the group, then total(): the same result with and without AVX).
+struct Quad2 {
+  Lanes2 lo, hi;
+
+  static Quad2 all(double a) { return {Lanes2::all(a), Lanes2::all(a)}; }
+  /// p[0 .. 3] of floats, widened (exact).
+  static Quad2 loadFloats(const float* p) {
+    return {Lanes2::loadFloats(p), Lanes2::loadFloats(p + 2)};
+  }
+  /// (a[j[0]], .., a[j[3]]).
+  static Quad2 gather(const double* a, const std::uint32_t* j) {
+    return {Lanes2::gather(a, j[0], j[1]), Lanes2::gather(a, j[2], j[3])};
+  }
+  /// Components of the 3-vectors at p[0 .. 3].
+  static void gather3(const double* const* p, Quad2& x, Quad2& y, Quad2& z) {
+    Lanes2::gather3(p[0], p[1], x.lo, y.lo, z.lo);
+    Lanes2::gather3(p[2], p[3], x.hi, y.hi, z.hi);
+  }
+  /// (q0 + q1) + (q2 + q3).
+  double total() const { return (lo.lane0() + lo.lane1()) + (hi.lane0() + hi.lane1()); }
+
+  friend Quad2 operator+(Quad2 a, Quad2 b) { return {a.lo + b.lo, a.hi + b.hi}; }
+  friend Quad2 operator-(Quad2 a, Quad2 b) { return {a.lo - b.lo, a.hi - b.hi}; }
+  friend Quad2 operator*(Quad2 a, Quad2 b) { return {a.lo * b.lo, a.hi * b.hi}; }
+};
+
 #if defined(WAKE_HAS_LANES4)
 
 /// Lanes4's operations: AVX code, inlined into the functions marked WAKE_TARGET_AVX.
@@ -183,6 +216,21 @@ struct Lanes4 {
   static constexpr int kWidth = 4;
 
   WAKE_LANES4_FN static Lanes4 all(double a) { return {_mm256_set1_pd(a)}; }
+  WAKE_LANES4_FN void store(double* p) const { _mm256_storeu_pd(p, v); }
+  // As Quad2's.
+  WAKE_LANES4_FN static Lanes4 loadFloats(const float* p) {
+    return {_mm256_cvtps_pd(_mm_loadu_ps(p))};
+  }
+  WAKE_LANES4_FN static Lanes4 gather(const double* a, const std::uint32_t* j) {
+    return {_mm256_set_m128d(_mm_loadh_pd(_mm_load_sd(a + j[2]), a + j[3]),
+                             _mm_loadh_pd(_mm_load_sd(a + j[0]), a + j[1]))};
+  }
+  WAKE_LANES4_FN static void gather3(const double* const* p, Lanes4& x, Lanes4& y, Lanes4& z);
+  WAKE_LANES4_FN double total() const {
+    alignas(32) double s[4];
+    _mm256_store_pd(s, v);
+    return (s[0] + s[1]) + (s[2] + s[3]);
+  }
 
   WAKE_LANES4_FN friend Lanes4 operator+(Lanes4 a, Lanes4 b) { return {_mm256_add_pd(a.v, b.v)}; }
   WAKE_LANES4_FN friend Lanes4 operator-(Lanes4 a, Lanes4 b) { return {_mm256_sub_pd(a.v, b.v)}; }
@@ -204,16 +252,18 @@ struct Lanes4 {
 };
 
 WAKE_LANES4_FN Lanes4 gatherLanes(Lanes4, const double* a, const std::uint32_t* j) {
-  return {_mm256_set_m128d(_mm_loadh_pd(_mm_load_sd(a + j[2]), a + j[3]),
-                           _mm_loadh_pd(_mm_load_sd(a + j[0]), a + j[1]))};
+  return Lanes4::gather(a, j);
 }
-WAKE_LANES4_FN void gather3Lanes(const double* const* p, Lanes4& x, Lanes4& y, Lanes4& z) {
+WAKE_LANES4_FN void Lanes4::gather3(const double* const* p, Lanes4& x, Lanes4& y, Lanes4& z) {
   const __m128d a = _mm_loadu_pd(p[0]), b = _mm_loadu_pd(p[1]);
   const __m128d c = _mm_loadu_pd(p[2]), d = _mm_loadu_pd(p[3]);
   x.v = _mm256_set_m128d(_mm_unpacklo_pd(c, d), _mm_unpacklo_pd(a, b));
   y.v = _mm256_set_m128d(_mm_unpackhi_pd(c, d), _mm_unpackhi_pd(a, b));
   z.v = _mm256_set_m128d(_mm_loadh_pd(_mm_load_sd(p[2] + 2), p[3] + 2),
                          _mm_loadh_pd(_mm_load_sd(p[0] + 2), p[1] + 2));
+}
+WAKE_LANES4_FN void gather3Lanes(const double* const* p, Lanes4& x, Lanes4& y, Lanes4& z) {
+  Lanes4::gather3(p, x, y, z);
 }
 
 /// acc - (a lane k, b lane k) for k = 0 .. 3, in that order (as for Lanes2; all four lanes).

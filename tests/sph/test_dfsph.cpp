@@ -150,10 +150,11 @@ TEST(Dfsph, DivergenceSolveStopsAConvergingFlow) {
   EXPECT_LT(change, 0.003);
 }
 
-TEST(Dfsph, SameBitsOnOneAndTwoThreads) {
-  auto run = [](int threads, std::vector<Vec3>& velocity, DfsphStats& stats) {
+TEST(Dfsph, SameBitsOnAnyNumberOfThreadsWithAndWithoutWideLanes) {
+  auto run = [](int threads, bool wide, std::vector<Vec3>& velocity, DfsphStats& stats) {
     omp_set_num_threads(threads);
     Fluid fluid(solverFluid(), kSolverDomain);
+    fluid.setWideLanes(wide);
     const double s = fluid.params().spacing();
     fillBlock(fluid, 12, 0.98 * s, 0.1 * s,
               [](const Vec3& x) { return Vec3(std::sin(40 * x.y()), -x.x(), 0.3 * x.z()); });
@@ -172,15 +173,20 @@ TEST(Dfsph, SameBitsOnOneAndTwoThreads) {
       velocity[fluid.state().id[i]] = fluid.state().velocity[i];
   };
   const int saved = omp_get_max_threads();
-  std::vector<Vec3> one, two;
-  DfsphStats a, b;
-  run(1, one, a);
-  run(2, two, b);
-  omp_set_num_threads(saved);
+  std::vector<Vec3> one;
+  DfsphStats a;
+  run(1, true, one, a);
   EXPECT_GT(a.density_iterations, 0);
-  EXPECT_EQ(a.density_iterations, b.density_iterations);
-  EXPECT_EQ(a.divergence_iterations, b.divergence_iterations);
-  ASSERT_EQ(one.size(), two.size());
-  for (std::size_t i = 0; i < one.size(); ++i)
-    ASSERT_EQ(one[i], two[i]) << "particle " << i;
+  // Pairs across ranges (2, 3 threads), and the passes in two lanes instead of AVX's four.
+  for (auto [threads, wide] : {std::pair{2, true}, {3, true}, {1, false}, {3, false}}) {
+    std::vector<Vec3> other;
+    DfsphStats b;
+    run(threads, wide, other, b);
+    EXPECT_EQ(a.density_iterations, b.density_iterations) << threads << " threads, " << wide;
+    EXPECT_EQ(a.divergence_iterations, b.divergence_iterations) << threads << " threads";
+    ASSERT_EQ(one.size(), other.size());
+    for (std::size_t i = 0; i < one.size(); ++i)
+      ASSERT_EQ(one[i], other[i]) << "particle " << i << ", " << threads << " threads, " << wide;
+  }
+  omp_set_num_threads(saved);
 }
