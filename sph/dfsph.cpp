@@ -285,16 +285,17 @@ struct RowView {
 /// walls' v_a . G_a - B_a where `wall_gradient` is not null.
 template <class Q>
 inline void ratesRange(std::int64_t i0, std::int64_t i1, const RowView& L, const Vec3* v,
-                       const Vec3* grad_sum, const Vec3* wall_gradient, const double* flux,
-                       double* rate) {
+                       const float* vf, const Vec3* grad_sum, const Vec3* wall_gradient,
+                       const double* flux, double* rate) {
   for (std::int64_t i = i0; i < i1; ++i) {
     const std::size_t q = static_cast<std::size_t>(i - i0);
     Q sum = Q::all(0.0);
     for (std::uint32_t t = L.offset[q]; t < L.offset[q + 1]; t += 4) {
       const std::uint32_t* j = L.index + t;
-      const double* p[4] = {v[j[0]].data(), v[j[1]].data(), v[j[2]].data(), v[j[3]].data()};
+      const float* p[4] = {vf + 4 * std::size_t(j[0]), vf + 4 * std::size_t(j[1]),
+                           vf + 4 * std::size_t(j[2]), vf + 4 * std::size_t(j[3])};
       Q vx, vy, vz;
-      Q::gather3(p, vx, vy, vz);
+      Q::gather3Floats(p, vx, vy, vz);
       sum = sum + ((vx * Q::loadFloats(L.gx + t) + vy * Q::loadFloats(L.gy + t)) +
                    vz * Q::loadFloats(L.gz + t));
     }
@@ -341,9 +342,9 @@ inline void impulseRange(std::int64_t i0, std::int64_t i1, const RowView& L, con
 
 #if defined(WAKE_HAS_LANES4)
 WAKE_TARGET_AVX void ratesRange4(std::int64_t i0, std::int64_t i1, const RowView& L, const Vec3* v,
-                                 const Vec3* grad_sum, const Vec3* wall_gradient,
+                                 const float* vf, const Vec3* grad_sum, const Vec3* wall_gradient,
                                  const double* flux, double* rate) {
-  ratesRange<Lanes4>(i0, i1, L, v, grad_sum, wall_gradient, flux, rate);
+  ratesRange<Lanes4>(i0, i1, L, v, vf, grad_sum, wall_gradient, flux, rate);
 }
 WAKE_TARGET_AVX void impulseRange4(std::int64_t i0, std::int64_t i1, const RowView& L,
                                    const double* ds, const Vec3* grad_sum, const std::uint8_t* near,
@@ -367,13 +368,21 @@ void DivergenceFreeSolver::densityRates(const Fluid& fluid) {
   const Vec3* v = st.velocity.data();
   const Vec3* wall = boundary_ ? boundary_->gradient.data() : nullptr;
   const double* flux = boundary_ ? boundary_->flux.data() : nullptr;
+  const std::int64_t n = static_cast<std::int64_t>(st.size());
   rate_.resize(st.size());
+  // The neighbours' velocities as floats, four per particle (one load each).
+  velocity_f_.resize(4 * st.size());
+  float* vf = velocity_f_.data();
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i)
+    for (int c = 0; c < 4; ++c)
+      vf[4 * i + c] = c < 3 ? static_cast<float>(v[i][c]) : 0.0f;
   auto range = ratesRange<Quad2>;
 #if defined(WAKE_HAS_LANES4)
   if (fluid.wideLanes()) range = ratesRange4;
 #endif
   forEachRow(fluid.neighbors(), [&](std::int64_t i0, std::int64_t i1, const RowView& L) {
-    range(i0, i1, L, v, grad_sum_.data(), wall, flux, rate_.data());
+    range(i0, i1, L, v, vf, grad_sum_.data(), wall, flux, rate_.data());
   });
 }
 

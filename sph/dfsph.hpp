@@ -157,6 +157,7 @@ class DivergenceFreeSolver {
   std::vector<double> weight_;                ///< (n) sum_b w_ab (with a boundary)
   std::vector<Vec3> centre_;                  ///< (n) c_a (m, with a boundary)
   std::vector<double> rate_;                  ///< (n) D_a
+  std::vector<float> velocity_f_;             ///< (4 n) the velocities as floats
   bool rates_fresh_ = false;                  ///< rate_ is of the velocities as they are
   std::vector<double> s_;                     ///< (n) this solve's s so far
   std::vector<double> ds_;                    ///< (n) this iteration's increment of s

@@ -195,6 +195,15 @@ struct Quad2 {
     Lanes2::gather3(p[0], p[1], x.lo, y.lo, z.lo);
     Lanes2::gather3(p[2], p[3], x.hi, y.hi, z.hi);
   }
+  /// Components of the float 3-vectors at p[0 .. 3], widened (exact).
+  static void gather3Floats(const float* const* p, Quad2& x, Quad2& y, Quad2& z) {
+    const double a[3][4] = {{p[0][0], p[1][0], p[2][0], p[3][0]},
+                            {p[0][1], p[1][1], p[2][1], p[3][1]},
+                            {p[0][2], p[1][2], p[2][2], p[3][2]}};
+    x = {Lanes2::load(a[0]), Lanes2::load(a[0] + 2)};
+    y = {Lanes2::load(a[1]), Lanes2::load(a[1] + 2)};
+    z = {Lanes2::load(a[2]), Lanes2::load(a[2] + 2)};
+  }
   /// (q0 + q1) + (q2 + q3).
   double total() const { return (lo.lane0() + lo.lane1()) + (hi.lane0() + hi.lane1()); }
 
@@ -226,6 +235,15 @@ struct Lanes4 {
                              _mm_loadh_pd(_mm_load_sd(a + j[0]), a + j[1]))};
   }
   WAKE_LANES4_FN static void gather3(const double* const* p, Lanes4& x, Lanes4& y, Lanes4& z);
+  /// As Quad2's: p[t] has 4 floats (the fourth is read, not used).
+  WAKE_LANES4_FN static void gather3Floats(const float* const* p, Lanes4& x, Lanes4& y, Lanes4& z) {
+    __m128 a = _mm_loadu_ps(p[0]), b = _mm_loadu_ps(p[1]), c = _mm_loadu_ps(p[2]),
+           d = _mm_loadu_ps(p[3]);
+    _MM_TRANSPOSE4_PS(a, b, c, d);
+    x.v = _mm256_cvtps_pd(a);
+    y.v = _mm256_cvtps_pd(b);
+    z.v = _mm256_cvtps_pd(c);
+  }
   WAKE_LANES4_FN double total() const {
     alignas(32) double s[4];
     _mm256_store_pd(s, v);
