@@ -42,8 +42,11 @@
 // wallImpulse(), wallLift() and wallAbove() give it per particle for the coupling
 // (Boundaries::addSolverReaction).
 //
-// Sums run over each particle's whole neighbour list in its order, and the error norms in
-// fixed chunks: the same bits on any number of threads.
+// prepare() stores each particle's whole neighbour list with its pairs' g_ab (floats; a
+// pair is computed once and stored in both lists), so that the iterations only read: each
+// particle's sums over its own list, four pairs at a time in four partial sums fixed by
+// the list (AVX where the CPU has it, two SSE2 lanes twice where not: the same bits), the
+// error norms in fixed chunks: the same bits on any number of threads.
 #pragma once
 
 #include "sph/fluid.hpp"
@@ -121,9 +124,10 @@ class DivergenceFreeSolver {
  private:
   /// Each particle's whole neighbour list with the pairs' g_ab, per range of the pair lists
   /// (a range's particles [i0, i1) are its rows q = i - i0): the neighbours of row q,
-  /// ascending, are index[offset[q] .. offset[q + 1]), g_ab the floats (gx, gy, gz) there.
-  /// Each pair is computed once and stored in both lists (g_ba = -g_ab) when both lie in
-  /// one range; the solves' passes then only read (no pair adds to another particle's sum).
+  /// ascending, are index[offset[q] .. offset[q] + size[q]), g_ab the floats (gx, gy, gz)
+  /// there; rows are padded to multiples of four with the particle itself and g = 0. A pair
+  /// in one range is computed once and stored in both rows (g_ba = -g_ab; cursor: where
+  /// the next earlier neighbour of a row goes while they are built).
   struct Lists {
     std::vector<std::uint32_t> offset, index, size, cursor;
     std::vector<float> gx, gy, gz;
