@@ -3,6 +3,7 @@
 
 #include "coupling/simulation.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -21,12 +22,14 @@ struct Options {
   std::string scene;  ///< wake_bench_dambreak: a scene file to run instead of the synthetic one
   bool particles_given = false;
   bool dfsph = false;  ///< --solver dfsph: the divergence-free solver instead of WCSPH
+  /// --skin F: the neighbour lists' skin, F x the support radius (< 0: the automatic one).
+  double skin = -1.0;
 };
 
 [[noreturn]] inline void usage(const char* program, const char* msg) {
   std::fprintf(stderr,
                "error: %s\nusage: %s [--particles N] [--steps S] [--warmup W] [--threads 1,2]"
-               " [--bodies B] [--scene FILE] [--solver wcsph|dfsph]\n",
+               " [--bodies B] [--scene FILE] [--solver wcsph|dfsph] [--skin F]\n",
                msg, program);
   std::exit(2);
 }
@@ -51,6 +54,9 @@ inline Options parse(int argc, char** argv) {
       const std::string s = value("--solver");
       if (s != "wcsph" && s != "dfsph") usage(argv[0], "--solver must be wcsph or dfsph");
       o.dfsph = s == "dfsph";
+    } else if (!std::strcmp(argv[i], "--skin")) {
+      o.skin = std::stod(value("--skin"));
+      if (!(o.skin >= 0) || !std::isfinite(o.skin)) usage(argv[0], "--skin must be >= 0");
     } else if (!std::strcmp(argv[i], "--bodies"))
       o.bodies = std::stoi(value("--bodies"));
     else if (!std::strcmp(argv[i], "--threads")) {

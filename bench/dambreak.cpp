@@ -62,6 +62,7 @@ Bench make(const Options& opt) {
   if (opt.scene.empty()) {
     SimulationSettings s = damBreak(opt.particles);
     if (opt.dfsph) s.solver = FluidSolver::Dfsph;
+    if (opt.skin >= 0) s.neighbor_skin = opt.skin * s.fluid.supportRadius();
     b.own = std::make_unique<Simulation>(s);
     return b;
   }
@@ -69,6 +70,7 @@ Bench make(const Options& opt) {
   if (opt.dfsph) scene.sim.solver = FluidSolver::Dfsph;
   if (opt.particles_given)
     overrideResolution(scene, std::cbrt(double(opt.particles) / estimateFluidParticles(scene.sim)));
+  if (opt.skin >= 0) scene.sim.neighbor_skin = opt.skin * scene.sim.fluid.supportRadius();
   b.world = std::make_unique<SceneWorld>(scene.sim, scene.bodies);
   b.world->coupled().start();
   return b;
@@ -104,6 +106,7 @@ int main(int argc, char** argv) {
     const StepTimings before = sim.timings();
     const std::uint64_t iterations0 = sim.densityIterations();
     const std::uint64_t divergence0 = sim.divergenceIterations();
+    const std::uint64_t builds0 = sim.fluid().neighborBuilds();
     const auto t0 = std::chrono::steady_clock::now();
     for (int i = 0; i < opt.steps; ++i)
       sim.step(1e9);
@@ -118,6 +121,9 @@ int main(int argc, char** argv) {
                 100 * t.neighbors / total, 100 * t.density / total, 100 * t.forces / total,
                 100 * t.boundary / total, 100 * t.integration / total, sim.time(),
                 static_cast<unsigned long long>(stateHash(sim)));
+    std::printf("# neighbour lists sorted and built at %llu of %d steps (skin %.3g m)\n",
+                static_cast<unsigned long long>(sim.fluid().neighborBuilds() - builds0), opt.steps,
+                sim.fluid().neighborSkin());
     if (opt.dfsph) {
       const double it = double(sim.densityIterations() - iterations0) / opt.steps;
       const double itv = double(sim.divergenceIterations() - divergence0) / opt.steps;

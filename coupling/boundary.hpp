@@ -395,12 +395,13 @@ template <class F>
 inline void Boundaries::forEachContactCandidate(const SampleSet& set, const Vec3& p, F&& f) const {
   const double reach = radius_ + radius_;  // r_f + r_b
   const double reach_sq = reach * reach;
-  set.grid.forEachRangeWithin(p, set.sample_reach, [&](std::uint32_t lo, std::uint32_t hi) {
-    for (std::uint32_t k = lo; k < hi; ++k) {
-      const double d_sq = (p - set.position[k]).squaredNorm();
-      if (d_sq < reach_sq) f(k, d_sq);
-    }
-  });
+  set.grid.forEachRangeInSphere(p, set.sample_reach, reach, false,
+                                [&](std::uint32_t lo, std::uint32_t hi) {
+                                  for (std::uint32_t k = lo; k < hi; ++k) {
+                                    const double d_sq = (p - set.position[k]).squaredNorm();
+                                    if (d_sq < reach_sq) f(k, d_sq);
+                                  }
+                                });
 }
 
 template <class F>

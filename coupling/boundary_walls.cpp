@@ -31,7 +31,8 @@ double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, cons
   const double rb = radius_;
   const double two_nu = 2.0 * nu;
   double sum = 0.0;
-  set.grid.forEachRangeWithin(p, set.density_reach, [&](std::uint32_t lo, std::uint32_t hi) {
+  // The cells the support's sphere reaches (the same samples pass, in the same order).
+  const auto visit = [&](std::uint32_t lo, std::uint32_t hi) {
     for (std::uint32_t k = lo; k < hi; ++k) {
       const Vec3 d = p - set.position[k];
       const double d_sq = d.squaredNorm();
@@ -52,7 +53,8 @@ double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, cons
       shear += w * rel;
       if (moment) *moment += w * set.position[k].cross(rel);
     }
-  });
+  };
+  set.grid.forEachRangeInSphere(p, set.density_reach, kernel_.supportRadius(), false, visit);
   return sum;
 }
 

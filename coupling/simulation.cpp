@@ -69,6 +69,7 @@ void validate(const SimulationSettings& s) {
   require(f.smoothing_ratio >= 0.8 && f.smoothing_ratio <= 2.0, "fluid.smoothing_ratio",
           "must be in [0.8, 2]");
   require(s.cfl > 0 && s.cfl <= 1, "time.cfl", "must be in (0, 1]");
+  require(std::isfinite(s.neighbor_skin), "neighbor_skin", "must be finite");
   if (s.solver == FluidSolver::Dfsph) {
     require(s.cfl <= 0.6, "time.cfl", "must be in (0, 0.6] with fluid.solver \"dfsph\"");
     const DfsphParams& d = s.dfsph;
@@ -184,6 +185,10 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
   require(rigid_->count() == s.bodies.size(), "bodies",
           "the rigid-body integrator has a different number of bodies");
   fluid_ = std::make_unique<Fluid>(s.fluid, s.domain, &data_.fluid);
+  if (s.neighbor_skin >= 0)
+    fluid_->setNeighborSkin(s.neighbor_skin);
+  else if (s.solver == FluidSolver::Wcsph)
+    fluid_->setNeighborSkin(SolverSettings::kAutoSkin * s.fluid.supportRadius());
   if (s.solver == FluidSolver::Dfsph) dfsph_ = std::make_unique<DivergenceFreeSolver>(s.dfsph);
   boundaries_ = std::make_unique<Boundaries>(s.fluid, s.domain);
   for (const BodySettings& b : s.bodies)
@@ -525,6 +530,8 @@ SimulationState Simulation::saveState() const {
   SimulationState s;
   static_cast<RunData&>(s) = data_;
   s.rigid = rigid_->saveState();
+  s.neighbor_reference = fluid_->neighborReference();
+  s.neighbor_reference_id = fluid_->neighborReferenceIds();
   return s;
 }
 
@@ -542,6 +549,7 @@ void Simulation::restoreState(const SimulationState& s) {
           "must be finite and >= 0");
   rigid_->loadState(s.rigid);
   data_ = static_cast<const RunData&>(s);  // fluid_ steps data_.fluid
+  fluid_->restoreNeighborReference(s.neighbor_reference, s.neighbor_reference_id);
   failure_.reset();
 }
 

@@ -61,6 +61,14 @@ struct SolverSettings {
   double max_dt = 1e-3;  ///< s, upper bound of the time step, > 0
   Aabb domain;           ///< m; particles leaving it are lost; empty = automatic
   HealthLimits health;
+  /// m, finite: the skin of the fluid's neighbour lists (Fluid::setNeighborSkin: the
+  /// particles sorted and the lists built only when one has moved half of it). < 0
+  /// (default): automatic, kAutoSkin x the support radius with Wcsph (its steps move a
+  /// particle a few hundredths of the support), 0 with Dfsph (steps up to ten times
+  /// longer: the lists would be built at nearly every step). The skin changes only where
+  /// the particles lie in memory, so the order of the sums: not the physics.
+  double neighbor_skin = -1.0;
+  static constexpr double kAutoSkin = 0.1;
 };
 
 /// A whole scene: the solver's settings, gravity, the fluid's blocks and the bodies.
@@ -149,6 +157,11 @@ struct RunData {
 /// settings, restoreState() continues the run bit for bit.
 struct SimulationState : RunData {
   std::vector<double> rigid;  ///< RigidBodies::saveState()
+  /// Fluid::neighborReference() and its ids: where the fluid's lists were last built
+  /// (empty without a skin, or from a checkpoint written before skins: the first step
+  /// then builds).
+  std::vector<Vec3> neighbor_reference;
+  std::vector<std::uint32_t> neighbor_reference_id;
 };
 
 /// Wall-clock seconds spent in each part of the step, summed over steps.

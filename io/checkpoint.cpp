@@ -84,6 +84,12 @@ void writeCheckpoint(const std::string& path, const SimulationState& s,
     w.writeDataset(group, "kinematic_viscosity", H5T_NATIVE_DOUBLE, f.kinematic_viscosity.data(), n,
                    1);
     w.writeDataset(group, "id", H5T_NATIVE_UINT32, f.id.data(), n, 1);
+    // Where the neighbour lists were last built (their skin): a resumed run builds them
+    // where the uninterrupted one would.
+    w.writeDataset(group, "neighbor_reference", H5T_NATIVE_DOUBLE, s.neighbor_reference.data(),
+                   s.neighbor_reference.size(), 3);
+    w.writeDataset(group, "neighbor_reference_id", H5T_NATIVE_UINT32,
+                   s.neighbor_reference_id.data(), s.neighbor_reference_id.size(), 1);
     w.writeDataset(group, "wrenches", H5T_NATIVE_DOUBLE, s.wrenches.data(), s.wrenches.size(), 6);
     w.writeDataset(group, "rigid", H5T_NATIVE_DOUBLE, s.rigid.data(), s.rigid.size(), 1);
     w.check(H5Fclose(file.release()), "close the file");
@@ -170,6 +176,12 @@ SimulationState readCheckpoint(const std::string& path, CheckpointInfo* info) {
   f.pressure = r.readDataset<double>(group, "pressure", H5T_NATIVE_DOUBLE, 1);
   f.kinematic_viscosity = r.readDataset<double>(group, "kinematic_viscosity", H5T_NATIVE_DOUBLE, 1);
   f.id = r.readDataset<std::uint32_t>(group, "id", H5T_NATIVE_UINT32, 1);
+  // Written since the neighbour lists' skin; without them the resumed run builds at once.
+  if (H5Lexists(group, "neighbor_reference", H5P_DEFAULT) > 0) {
+    s.neighbor_reference = vec3s("neighbor_reference");
+    s.neighbor_reference_id =
+        r.readDataset<std::uint32_t>(group, "neighbor_reference_id", H5T_NATIVE_UINT32, 1);
+  }
   const std::vector<double> w = r.readDataset<double>(group, "wrenches", H5T_NATIVE_DOUBLE, 6);
   s.wrenches.resize(w.size() / 6);
   for (std::size_t b = 0; b < s.wrenches.size(); ++b) {

@@ -87,33 +87,96 @@ Fluid::Fluid(const FluidParams& params, const Aabb& domain, FluidState* state)
     throw std::invalid_argument("fluid.speed_of_sound must be finite and > 0");
 }
 
-void Fluid::updateNeighbors() {
-  // Fit the grid to the particles' current bounds: cells of half the support radius
+void Fluid::fitGrid(const std::vector<Vec3>& x, double radius) {
+  // Fit the grid to the particles' current bounds: cells of half the search radius
   // (125 small cells per query, fewer candidates) while that grid stays small; else
-  // cells of the full support (the domain-sized fallback checked at construction).
-  const std::int64_t n = static_cast<std::int64_t>(state_.size());
+  // cells of the full radius (the domain-sized fallback checked at construction).
+  const std::int64_t n = static_cast<std::int64_t>(x.size());
   double lo[3] = {domain_.max.x(), domain_.max.y(), domain_.max.z()};
   double hi[3] = {domain_.min.x(), domain_.min.y(), domain_.min.z()};
 #pragma omp parallel for schedule(static) reduction(min : lo[:3]) reduction(max : hi[:3])
   for (std::int64_t i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], state_.position[i][k]);
-      hi[k] = std::max(hi[k], state_.position[i][k]);
+      lo[k] = std::min(lo[k], x[i][k]);
+      hi[k] = std::max(hi[k], x[i][k]);
     }
-  const double support = kernel_.supportRadius();
   Aabb box{Vec3(lo[0], lo[1], lo[2]), Vec3(hi[0], hi[1], hi[2])};
   bounds_ = box;
   if (box.empty()) box = domain_;
-  const double fine = 0.5 * support;
+  const double fine = 0.5 * radius;
   const double fine_cells = UniformGrid::cellsFor(box, fine);
   if (fine_cells <= std::max(8.0 * double(n), 65536.0) &&
       fine_cells <= double(UniformGrid::kMaxCells))
     grid_.reset(box, fine, 2);
   else
-    grid_.reset(domain_, support, 1);
+    grid_.reset(domain_, radius, 1);
+}
+
+void Fluid::setNeighborSkin(double skin) {
+  if (!(skin >= 0.0) || !std::isfinite(skin))
+    throw std::invalid_argument("neighbour skin must be finite and >= 0");
+  skin_ = skin;
+  candidates_ready_ = false;
+  reference_.clear();
+  reference_id_.clear();
+}
+
+void Fluid::restoreNeighborReference(std::vector<Vec3> position, std::vector<std::uint32_t> id) {
+  reference_ = std::move(position);
+  reference_id_ = std::move(id);
+  candidates_ready_ = false;
+}
+
+bool Fluid::buildCandidates() {
+  const double radius = kernel_.supportRadius() + skin_;
+  fitGrid(reference_, radius);
+  grid_.sort(reference_, order_);
+  for (std::size_t k = 0; k < order_.size(); ++k)
+    if (order_[k] != k) return false;
+  buildPairLists(grid_, reference_, radius, candidates_);
+  return true;
+}
+
+bool Fluid::movedFromReference() const {
+  const std::size_t n = state_.size();
+  if (reference_.size() != n || reference_id_.size() != n) return true;
+  // Two particles each skin / 2 closer than at the build: a pair within the support that
+  // was not a candidate. (A hair less than skin / 2: rounding in the distances.)
+  const double limit = 0.5 * skin_ * (1.0 - 1e-9);
+  const double limit_sq = limit * limit;
+  int moved = 0;
+  const std::int64_t sn = static_cast<std::int64_t>(n);
+#pragma omp parallel for schedule(static) reduction(max : moved)
+  for (std::int64_t i = 0; i < sn; ++i) {
+    const bool far = !((state_.position[i] - reference_[i]).squaredNorm() < limit_sq);
+    moved = std::max(moved, int(far || state_.id[i] != reference_id_[i]));
+  }
+  return moved != 0;
+}
+
+void Fluid::updateNeighbors() {
+  const double support = kernel_.supportRadius();
+  if (skin_ > 0.0 && !reference_.empty()) {
+    if (!candidates_ready_ && reference_.size() == state_.size())
+      candidates_ready_ = buildCandidates();
+    if (candidates_ready_ && !movedFromReference()) {
+      filterPairLists(candidates_, state_.position, support, neighbors_);
+      return;
+    }
+  }
+  ++builds_;
+  fitGrid(state_.position, support + skin_);
   grid_.sort(state_.position, order_);
   state_.permute(order_, scratch_);
-  buildPairLists(grid_, state_.position, kernel_.supportRadius(), neighbors_);
+  if (!(skin_ > 0.0)) {
+    buildPairLists(grid_, state_.position, support, neighbors_);
+    return;
+  }
+  reference_ = state_.position;
+  reference_id_ = state_.id;
+  buildPairLists(grid_, state_.position, support + skin_, candidates_);
+  candidates_ready_ = true;
+  filterPairLists(candidates_, state_.position, support, neighbors_);
 }
 
 namespace {

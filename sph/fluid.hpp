@@ -102,12 +102,31 @@ class Fluid {
   const FluidState& state() const { return state_; }
   /// The pairs within the support radius, each once (buildPairLists).
   const PairLists& neighbors() const { return neighbors_; }
-  /// Bounds of the particles' positions at the last updateNeighbors (empty: none).
+  /// Bounds of the particles' positions at the last sort (updateNeighbors; empty: none).
   const Aabb& particleBounds() const { return bounds_; }
 
-  /// Sorts particles by grid cell (permuting every array) and builds the neighbour lists.
-  /// Particles outside the domain must have been removed before.
+  /// The pairs within the support radius of the particles now (neighbors()). Without a
+  /// skin: sorts the particles by grid cell (permuting every array) and builds them. With a
+  /// skin (setNeighborSkin): sorts and builds the candidate pairs within support + skin
+  /// only when some particle has moved skin / 2 or more since the last build or the
+  /// particles changed (their number or a slot's id), and otherwise keeps the particles'
+  /// order and takes the pairs from the candidates (filterPairLists): the same pairs in
+  /// the same order as a build in that order would give. Particles outside the domain must
+  /// have been removed before.
   void updateNeighbors();
+  /// The neighbour lists' skin (m, finite, >= 0; 0, the default: sorted and built every
+  /// call). Takes effect at the next build. Throws std::invalid_argument otherwise.
+  void setNeighborSkin(double skin);
+  double neighborSkin() const { return skin_; }
+  /// How many times updateNeighbors sorted and built (every call without a skin).
+  std::uint64_t neighborBuilds() const { return builds_; }
+  /// The particles' positions and ids at the last build with a skin (empty without one):
+  /// what decides the next build. restoreNeighborReference sets them again (a saved run's),
+  /// so that a continued run builds where the uninterrupted one would (a reference that
+  /// does not fit the particles, or is not in their grid order, means a build).
+  const std::vector<Vec3>& neighborReference() const { return reference_; }
+  const std::vector<std::uint32_t>& neighborReferenceIds() const { return reference_id_; }
+  void restoreNeighborReference(std::vector<Vec3> position, std::vector<std::uint32_t> id);
   /// Summation density over fluid neighbours (no boundary share; the coupling adds it).
   void computeFluidDensity();
   /// Tait pressure from density, clamped at zero (no tensile pull at free surfaces).
@@ -158,11 +177,27 @@ class Fluid {
   FluidState& state_;  ///< the state stepped: the caller's or own_
   FluidState scratch_;
   PairLists neighbors_;
-  std::vector<std::uint32_t> order_;   ///< (n) scratch: cell-sort permutation
-  std::vector<double> p_over_rho_sq_;  ///< (n) P / rho^2 (m^5 / (kg s^2)), this step
-  std::vector<double> inv_rho_;        ///< (n) 1 / rho (m^3/kg), this step
-  std::vector<double> pair_sums_;      ///< (6 n) scratch of the force loop's sums
+  /// With a skin: the pairs within support + skin at the last build (of reference_).
+  PairLists candidates_;
+  bool candidates_ready_ = false;            ///< candidates_ are those of reference_
+  double skin_ = 0;                          ///< m
+  std::uint64_t builds_ = 0;                 ///< sorts and builds so far
+  std::vector<Vec3> reference_;              ///< (n) m, positions at the last build (skin)
+  std::vector<std::uint32_t> reference_id_;  ///< (n) ids at the last build (skin)
+  std::vector<std::uint32_t> order_;         ///< (n) scratch: cell-sort permutation
+  std::vector<double> p_over_rho_sq_;        ///< (n) P / rho^2 (m^5 / (kg s^2)), this step
+  std::vector<double> inv_rho_;              ///< (n) 1 / rho (m^3/kg), this step
+  std::vector<double> pair_sums_;            ///< (6 n) scratch of the force loop's sums
   bool wide_lanes_ = hasWideLanes();
+
+  /// Fits the grid to the bounds of `x` for pairs within `radius`.
+  void fitGrid(const std::vector<Vec3>& x, double radius);
+  /// Builds candidates_ from reference_ (sorted positions); false when reference_ is not
+  /// in the grid's order.
+  bool buildCandidates();
+  /// Whether some particle moved skin / 2 or more from reference_, or the particles
+  /// are not those of reference_.
+  bool movedFromReference() const;
 };
 
 }  // namespace wake

@@ -89,6 +89,47 @@ void forEachEarlier(const PairLists& pairs, std::size_t first, std::size_t lo, s
   }
 }
 
+/// Writes j at dst[used] and returns used + 1 when p_j is closer than sqrt(radius_sq) to
+/// (xi, yi, zi), else used: a list's branch-free append (every candidate written, the
+/// cursor moved only for neighbours).
+inline std::size_t appendIfWithin(const Vec3& pj, std::uint32_t j, double xi, double yi, double zi,
+                                  double radius_sq, std::uint32_t* dst, std::size_t used) {
+  const double dx = xi - pj[0];
+  const double dy = yi - pj[1];
+  const double dz = zi - pj[2];
+  dst[used] = j;
+  return used + static_cast<std::size_t>(dx * dx + dy * dy + dz * dz < radius_sq);
+}
+
+/// The before lists of `out` from its later lists and span (buildPairLists' second part).
+void buildBeforeLists(PairLists& out) {
+  const std::size_t ranges = out.ranges();
+  // The earlier neighbours before each range's start: pairs (j, i) with j < lo <= i have
+  // i - j <= span, so only the range's first `span` points have any.
+#pragma omp parallel for schedule(static, 1) num_threads(static_cast <int>(ranges))
+  for (std::int64_t sr = 0; sr < static_cast<std::int64_t>(ranges); ++sr) {
+    const std::size_t r = static_cast<std::size_t>(sr);
+    const std::size_t lo = out.range[r], hi = std::min(out.range[r + 1], lo + out.span);
+    const std::size_t first = lo > out.span ? lo - out.span : 0;
+    std::vector<std::uint32_t>& off = out.before_offset[r];
+    std::vector<std::uint32_t>& list = out.before[r];
+    off.assign(hi - lo + 1, 0);
+    forEachEarlier(out, first, lo, hi, [&](std::uint32_t j, std::uint32_t i) {
+      if (j < lo) ++off[i - lo + 1];
+    });
+    for (std::size_t q = 1; q < off.size(); ++q)
+      off[q] += off[q - 1];
+    list.resize(off.back());
+    // off[q] serves as point q's cursor, then is restored.
+    forEachEarlier(out, first, lo, hi, [&](std::uint32_t j, std::uint32_t i) {
+      if (j < lo) list[off[i - lo]++] = j;
+    });
+    for (std::size_t q = off.size() - 1; q > 0; --q)
+      off[q] = off[q - 1];
+    off[0] = 0;
+  }
+}
+
 }  // namespace
 
 void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
@@ -125,13 +166,8 @@ void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, do
             if (local.size() < used + (e - b))
               local.resize(used + (e - b) + std::max<std::size_t>(used / 4, 4096));
             std::uint32_t* dst = local.data();
-            for (std::uint32_t j = b; j < e; ++j) {
-              const double dx = xi - points[j][0];
-              const double dy = yi - points[j][1];
-              const double dz = zi - points[j][2];
-              dst[used] = j;
-              used += static_cast<std::size_t>(dx * dx + dy * dy + dz * dz < radius_sq);
-            }
+            for (std::uint32_t j = b; j < e; ++j)
+              used = appendIfWithin(points[j], j, xi, yi, zi, radius_sq, dst, used);
           });
       out.begin[i] = before;
       out.count[i] = static_cast<std::uint32_t>(used - before);
@@ -140,30 +176,47 @@ void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, do
     spans[r] = span;
   }
   out.span = ranges ? *std::max_element(spans.begin(), spans.end()) : 0;
-  // The earlier neighbours before each range's start: pairs (j, i) with j < lo <= i have
-  // i - j <= span, so only the range's first `span` points have any.
-#pragma omp parallel for schedule(static, 1) num_threads(threads)
+  buildBeforeLists(out);
+}
+
+void filterPairLists(const PairLists& candidates, const std::vector<Vec3>& points, double radius,
+                     PairLists& out) {
+  const std::size_t n = points.size();
+  if (candidates.size() != n || candidates.ranges() == 0)
+    throw std::logic_error("filterPairLists: the candidates are for another number of points");
+  const double radius_sq = radius * radius;
+  const std::size_t ranges = candidates.ranges();
+  out.range = candidates.range;
+  out.later.resize(ranges);
+  out.before_offset.resize(ranges);
+  out.before.resize(ranges);
+  out.begin.resize(n);
+  out.count.resize(n);
+  std::vector<std::size_t> spans(ranges, 0);
+#pragma omp parallel for schedule(static, 1) num_threads(static_cast <int>(ranges))
   for (std::int64_t sr = 0; sr < static_cast<std::int64_t>(ranges); ++sr) {
+    // Each candidate list kept in its order, without the pairs now `radius` or farther
+    // apart (the same test as buildPairLists'); the kept ones fit in the candidates' room.
     const std::size_t r = static_cast<std::size_t>(sr);
-    const std::size_t lo = out.range[r], hi = std::min(out.range[r + 1], lo + out.span);
-    const std::size_t first = lo > out.span ? lo - out.span : 0;
-    std::vector<std::uint32_t>& off = out.before_offset[r];
-    std::vector<std::uint32_t>& list = out.before[r];
-    off.assign(hi - lo + 1, 0);
-    forEachEarlier(out, first, lo, hi, [&](std::uint32_t j, std::uint32_t i) {
-      if (j < lo) ++off[i - lo + 1];
-    });
-    for (std::size_t q = 1; q < off.size(); ++q)
-      off[q] += off[q - 1];
-    list.resize(off.back());
-    // off[q] serves as point q's cursor, then is restored.
-    forEachEarlier(out, first, lo, hi, [&](std::uint32_t j, std::uint32_t i) {
-      if (j < lo) list[off[i - lo]++] = j;
-    });
-    for (std::size_t q = off.size() - 1; q > 0; --q)
-      off[q] = off[q - 1];
-    off[0] = 0;
+    const std::vector<std::uint32_t>& from = candidates.later[r];
+    std::vector<std::uint32_t>& local = out.later[r];
+    if (local.size() < from.size()) local.resize(from.size());
+    std::uint32_t* dst = local.data();
+    std::size_t used = 0, span = 0;
+    for (std::size_t i = candidates.range[r]; i < candidates.range[r + 1]; ++i) {
+      const double xi = points[i][0], yi = points[i][1], zi = points[i][2];
+      const std::size_t before = used;
+      const std::uint32_t* list = from.data() + candidates.begin[i];
+      for (std::uint32_t k = 0, m = candidates.count[i]; k < m; ++k)
+        used = appendIfWithin(points[list[k]], list[k], xi, yi, zi, radius_sq, dst, used);
+      out.begin[i] = before;
+      out.count[i] = static_cast<std::uint32_t>(used - before);
+      if (used > before) span = std::max<std::size_t>(span, local[used - 1] - i);
+    }
+    spans[r] = span;
   }
+  out.span = ranges ? *std::max_element(spans.begin(), spans.end()) : 0;
+  buildBeforeLists(out);
 }
 
 void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,

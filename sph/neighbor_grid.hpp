@@ -179,6 +179,14 @@ struct PairLists {
 void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
                     PairLists& out);
 
+/// The pairs of `candidates` (pair lists of the same points, e.g. built with a larger
+/// radius when they were elsewhere) that are now closer than `radius`, in the candidates'
+/// order and ranges: what buildPairLists would give for these points in this order, when
+/// every such pair is a candidate. Throws std::logic_error when the candidates are for
+/// another number of points.
+void filterPairLists(const PairLists& candidates, const std::vector<Vec3>& points, double radius,
+                     PairLists& out);
+
 /// Flat neighbour lists: neighbours of point i are index[offset[i] .. offset[i + 1]).
 struct NeighborList {
   std::vector<std::uint64_t> offset;  ///< (n + 1)
