@@ -9,6 +9,7 @@
 #include <functional>
 #include <random>
 #include <set>
+#include <string>
 
 using namespace wake;
 
@@ -40,6 +41,35 @@ std::vector<Vec3> sortedByCell(UniformGrid& grid, const std::vector<Vec3>& x,
   for (std::size_t k = 0; k < x.size(); ++k)
     sorted[k] = x[order[k]];
   return sorted;
+}
+
+/// `pairs` holds, for each point i, its later neighbours (j > i, ascending) and its
+/// earlier ones before its range's start, as `expected` (each point's neighbours) says.
+void expectPairLists(const PairLists& pairs, const std::vector<std::set<std::uint32_t>>& expected,
+                     const std::string& what) {
+  ASSERT_EQ(pairs.size(), expected.size()) << what;
+  ASSERT_EQ(pairs.range.front(), 0u) << what;
+  ASSERT_EQ(pairs.range.back(), expected.size()) << what;
+  for (std::size_t rg = 0; rg < pairs.ranges(); ++rg) {
+    const std::size_t lo = pairs.range[rg];
+    const std::vector<std::uint32_t>& off = pairs.before_offset[rg];
+    for (std::size_t i = lo; i < pairs.range[rg + 1]; ++i) {
+      ASSERT_EQ(pairs.rangeOf(i), rg) << what;
+      const std::uint32_t* later = pairs.later[rg].data() + pairs.begin[i];
+      const std::vector<std::uint32_t> got_later(later, later + pairs.count[i]);
+      std::vector<std::uint32_t> want_later, want_before;
+      for (std::uint32_t j : expected[i]) {  // ascending
+        if (j > i) want_later.push_back(j);
+        if (j < lo) want_before.push_back(j);
+      }
+      EXPECT_EQ(got_later, want_later) << "point " << i << ", " << what;
+      std::vector<std::uint32_t> got_before;
+      if (i - lo + 1 < off.size())
+        got_before.assign(pairs.before[rg].begin() + off[i - lo],
+                          pairs.before[rg].begin() + off[i - lo + 1]);
+      EXPECT_EQ(got_before, want_before) << "point " << i << ", " << what;
+    }
+  }
 }
 
 /// Sorts the points by cell, builds lists, and compares with brute force on sorted points:
@@ -79,30 +109,10 @@ void expectMatchesBruteForce(std::vector<Vec3> x, const Aabb& domain, double r) 
       // that lie before its range's start (one range per thread).
       PairLists pairs;
       buildPairLists(grid, sorted, r, pairs);
-      ASSERT_EQ(pairs.size(), sorted.size());
       ASSERT_EQ(pairs.ranges(), std::size_t(threads));
-      ASSERT_EQ(pairs.range.front(), 0u);
-      ASSERT_EQ(pairs.range.back(), sorted.size());
-      for (std::size_t rg = 0; rg < pairs.ranges(); ++rg) {
-        const std::size_t lo = pairs.range[rg];
-        const std::vector<std::uint32_t>& off = pairs.before_offset[rg];
-        for (std::size_t i = lo; i < pairs.range[rg + 1]; ++i) {
-          ASSERT_EQ(pairs.rangeOf(i), rg);
-          const std::uint32_t* later = pairs.later[rg].data() + pairs.begin[i];
-          const std::vector<std::uint32_t> got_later(later, later + pairs.count[i]);
-          std::vector<std::uint32_t> want_later, want_before;
-          for (std::uint32_t j : expected[i]) {  // ascending
-            if (j > i) want_later.push_back(j);
-            if (j < lo) want_before.push_back(j);
-          }
-          EXPECT_EQ(got_later, want_later) << "point " << i << ", " << threads << " threads";
-          std::vector<std::uint32_t> got_before;
-          if (i - lo + 1 < off.size())
-            got_before.assign(pairs.before[rg].begin() + off[i - lo],
-                              pairs.before[rg].begin() + off[i - lo + 1]);
-          EXPECT_EQ(got_before, want_before) << "point " << i << ", " << threads << " threads";
-        }
-      }
+      expectPairLists(
+          pairs, expected,
+          "reach " + std::to_string(reach) + ", " + std::to_string(threads) + " threads");
       if (threads == 1) {
         first = list;
       } else {
@@ -213,4 +223,51 @@ TEST(Neighbors, SphereQueryFindsWhatTheWholeBlockFinds) {
                 double(sphere_candidates) / double(block_candidates));
     EXPECT_LT(sphere_candidates, 0.8 * block_candidates) << "reach " << reach;
   }
+}
+
+TEST(Neighbors, FilteredCandidatesAreThePairsOfPointsMovedLessThanHalfTheSkin) {
+  // Candidates within r + skin of sorted points; then every point moves (random
+  // directions, up to just under skin / 2) without being sorted again: the candidates'
+  // pairs now closer than r are every pair closer than r (brute force on the moved
+  // points), in order, on any number of threads. Clustered points and points on a
+  // lattice (many pairs at exactly r) as well as uniform ones.
+  const double r = 0.15, skin = 0.03;
+  std::vector<Vec3> x = randomPoints(1500, -1, 1, 31);
+  for (int k = 0; k < 300; ++k)  // a lattice of spacing r / 2
+    x[k] = Vec3(0.075 * (k % 7), 0.075 * ((k / 7) % 7), 0.075 * (k / 49));
+  std::mt19937 rng(32);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  UniformGrid grid(kCube, 0.5 * (r + skin), UniformGrid::kMaxCells, 2);
+  std::vector<std::uint32_t> order;
+  const std::vector<Vec3> sorted = sortedByCell(grid, x, order);
+  std::vector<Vec3> moved = sorted;
+  for (std::size_t i = 0; i < moved.size(); ++i) {
+    if (i % 5 == 0) continue;  // some stay: pairs at exactly r on the lattice
+    const Vec3 direction = Vec3(g(rng), g(rng), g(rng)).normalized();
+    moved[i] += 0.4999 * skin * std::cbrt(u(rng)) * direction;
+  }
+  const auto expected = bruteForce(moved, r);
+  std::size_t lost = 0;  // pairs the unmoved points' lists within r alone would miss
+  for (std::size_t i = 0; i < moved.size(); ++i)
+    for (std::uint32_t j : expected[i])
+      lost += (sorted[i] - sorted[j]).squaredNorm() >= r * r;
+  EXPECT_GT(lost, 50u) << "the points did not move enough to test the skin";
+  const int threads_before = omp_get_max_threads();
+  for (int threads : {1, 2, 3}) {
+    omp_set_num_threads(threads);
+    PairLists candidates, pairs;
+    buildPairLists(grid, sorted, r + skin, candidates);
+    filterPairLists(candidates, moved, r, pairs);
+    expectPairLists(pairs, expected, std::to_string(threads) + " threads");
+    // The same lists when nothing moved: a build within r.
+    PairLists built, filtered;
+    buildPairLists(grid, sorted, r, built);
+    filterPairLists(candidates, sorted, r, filtered);
+    EXPECT_EQ(filtered.count, built.count) << threads << " threads";
+    EXPECT_EQ(filtered.span, built.span) << threads << " threads";
+  }
+  omp_set_num_threads(threads_before);
+  PairLists none, out;
+  EXPECT_THROW(filterPairLists(none, moved, r, out), std::logic_error);
 }
