@@ -20,6 +20,7 @@
 #include <array>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace wake {
@@ -160,6 +161,14 @@ class Boundaries {
   void addWallTerms(const Fluid& fluid, const BodyPlacement& at, std::vector<double>& density,
                     std::vector<Vec3>& shear, std::vector<Wrench>& reaction,
                     WallPairs& pairs) const;
+  /// For a fluid whose neighbour lists have a skin (Fluid::setNeighborSkin): lists, per
+  /// particle, the static samples within support + skin / 2 of where the particle was at
+  /// the lists' last build (Fluid::neighborReference), again whenever they were built
+  /// since. While the fluid's lists stand, no particle is skin / 2 from there, so these
+  /// hold every static sample within its support: the walls' pass (addDensity,
+  /// addWallTerms) then reads them instead of searching the static grid, the same samples
+  /// in the same (ascending) order. Without a skin it does nothing and the pass searches.
+  void prepareWallCandidates(const Fluid& fluid);
 
   /// Each sample's pressure, extrapolated from the fluid near it (Adami, Hu & Adams 2012,
   /// "A generalized wall boundary condition for SPH"): the samples stand for fluid
@@ -325,8 +334,11 @@ class Boundaries {
   void wallPass(const Fluid& fluid, const BodyPlacement& at, std::vector<double>& density,
                 std::vector<Vec3>* shear, std::vector<Wrench>* reaction, WallPairs* pairs) const;
   /// `record` (may be null): the samples within the support are appended to it.
+  /// `candidates` (may be null): the samples to look at, ascending, instead of searching
+  /// the set's grid.
   double wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u, const Vec3& omega,
-                  Vec3& shear, Vec3* moment, std::vector<std::uint32_t>* record) const;
+                  Vec3& shear, Vec3* moment, std::vector<std::uint32_t>* record,
+                  const std::uint32_t* candidates = nullptr, std::size_t count = 0) const;
   /// sum_k V_k (pr2 + P_k / rho_k^2) grad W_ak over the `count` samples `near` of one set at
   /// p (set space), and its moment sum_k x_k x (...) when asked (two-way bodies).
   Vec3 pressureSum(const SampleSet& set, const std::vector<double>& p_rho2, const Vec3& p,
@@ -387,6 +399,18 @@ class Boundaries {
   /// Particles per chunk of addWallTerms' reaction sums (fixed: determinism).
   static constexpr std::size_t kChunk = 2048;
   mutable std::vector<Wrench> chunk_reaction_;  ///< scratch: (chunks x bodies)
+  /// prepareWallCandidates' lists: particle i's static samples are
+  /// index[offset[i] .. offset[i + 1]), for `fluid` after its build number `build`.
+  struct WallCandidates {
+    const Fluid* fluid = nullptr;
+    std::uint64_t build = 0;
+    std::vector<std::uint64_t> offset;  ///< (n + 1)
+    std::vector<std::uint32_t> index;
+  };
+  WallCandidates wall_candidates_;
+  /// The static samples of particle i from wall_candidates_ ({nullptr, 0}: search them).
+  std::pair<const std::uint32_t*, std::size_t> staticCandidates(const Fluid& fluid,
+                                                                std::size_t i) const;
 };
 
 // Template definitions (the penalty force visits samples from coupling/penalty.cpp).

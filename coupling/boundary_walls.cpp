@@ -24,37 +24,100 @@ void Boundaries::addWallTerms(const Fluid& fluid, const BodyPlacement& at,
   wallPass(fluid, at, density, &shear, &reaction, &pairs);
 }
 
+void Boundaries::prepareWallCandidates(const Fluid& fluid) {
+  WallCandidates& c = wall_candidates_;
+  const double skin = fluid.neighborSkin();
+  const std::vector<Vec3>& x = fluid.neighborReference();
+  const std::size_t n = x.size();
+  if (!(skin > 0.0) || static_.position.empty() || n != fluid.state().size()) {
+    c.fluid = nullptr;
+    return;
+  }
+  if (c.fluid == &fluid && c.build == fluid.neighborBuilds() && c.offset.size() == n + 1) return;
+  // A sample within the support of a particle now is within support + skin / 2 of where
+  // it was (it has moved less than skin / 2); a hair more for rounding.
+  const double radius = (kernel_.supportRadius() + 0.5 * skin) * (1.0 + 1e-9);
+  const double radius_sq = radius * radius;
+  const int reach =
+      std::max(1, static_cast<int>(std::ceil(radius / static_.grid.cellSize() - 1e-12)));
+  const std::int64_t sn = static_cast<std::int64_t>(n);
+  auto each = [&](std::size_t i, auto&& f) {
+    const Vec3 xi = x[i];
+    static_.grid.forEachRangeInSphere(xi, reach, radius, false,
+                                      [&](std::uint32_t lo, std::uint32_t hi) {
+                                        for (std::uint32_t k = lo; k < hi; ++k)
+                                          if ((xi - static_.position[k]).squaredNorm() < radius_sq)
+                                            f(k);
+                                      });
+  };
+  c.offset.assign(n + 1, 0);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < sn; ++i) {
+    std::uint64_t count = 0;
+    each(static_cast<std::size_t>(i), [&](std::uint32_t) { ++count; });
+    c.offset[i + 1] = count;
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    c.offset[i + 1] += c.offset[i];
+  c.index.resize(c.offset[n]);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < sn; ++i) {
+    std::uint32_t* out = c.index.data() + c.offset[i];
+    each(static_cast<std::size_t>(i), [&](std::uint32_t k) { *out++ = k; });
+  }
+  c.fluid = &fluid;
+  c.build = fluid.neighborBuilds();
+}
+
+std::pair<const std::uint32_t*, std::size_t> Boundaries::staticCandidates(const Fluid& fluid,
+                                                                          std::size_t i) const {
+  const WallCandidates& c = wall_candidates_;
+  if (c.fluid != &fluid || c.build != fluid.neighborBuilds() ||
+      c.offset.size() != fluid.state().size() + 1)
+    return {nullptr, 0};
+  return {c.index.data() + c.offset[i], static_cast<std::size_t>(c.offset[i + 1] - c.offset[i])};
+}
+
 double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u,
                             const Vec3& omega, Vec3& shear, Vec3* moment,
-                            std::vector<std::uint32_t>* record) const {
+                            std::vector<std::uint32_t>* record, const std::uint32_t* candidates,
+                            std::size_t count) const {
   const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
   const double rb = radius_;
   const double two_nu = 2.0 * nu;
   double sum = 0.0;
-  // The cells the support's sphere reaches (the same samples pass, in the same order).
-  const auto visit = [&](std::uint32_t lo, std::uint32_t hi) {
-    for (std::uint32_t k = lo; k < hi; ++k) {
-      const Vec3 d = p - set.position[k];
-      const double d_sq = d.squaredNorm();
-      if (d_sq >= support_sq) continue;
-      if (record) record->push_back(k);
-      const double r = std::sqrt(d_sq);
-      sum += set.volume[k] * kernel_.value(r);
-      if (!(nu > 0.0)) continue;
-      const double factor = shear_factor_[set.body[k]];
-      if (factor <= 0.0) continue;
-      // Morris's ghost velocity: the sample lies rb behind the surface, the particle
-      // `beyond` in front of it; 1 + rb / beyond, at most 2 (a particle at or inside its
-      // radius).
-      const double beyond = d.dot(set.normal[k]) - rb;
-      const double beta = beyond > rb ? 1.0 + rb / beyond : 2.0;
-      const double w = -factor * two_nu * set.volume[k] * beta * kernel_.derivativeOverR(r);
-      const Vec3 rel = u - omega.cross(set.position[k]);
-      shear += w * rel;
-      if (moment) *moment += w * set.position[k].cross(rel);
-    }
+  // One sample's terms.
+  const auto one = [&](std::uint32_t k) {
+    const Vec3 d = p - set.position[k];
+    const double d_sq = d.squaredNorm();
+    if (d_sq >= support_sq) return;
+    if (record) record->push_back(k);
+    const double r = std::sqrt(d_sq);
+    sum += set.volume[k] * kernel_.value(r);
+    if (!(nu > 0.0)) return;
+    const double factor = shear_factor_[set.body[k]];
+    if (factor <= 0.0) return;
+    // Morris's ghost velocity: the sample lies rb behind the surface, the particle
+    // `beyond` in front of it; 1 + rb / beyond, at most 2 (a particle at or inside its
+    // radius).
+    const double beyond = d.dot(set.normal[k]) - rb;
+    const double beta = beyond > rb ? 1.0 + rb / beyond : 2.0;
+    const double w = -factor * two_nu * set.volume[k] * beta * kernel_.derivativeOverR(r);
+    const Vec3 rel = u - omega.cross(set.position[k]);
+    shear += w * rel;
+    if (moment) *moment += w * set.position[k].cross(rel);
   };
-  set.grid.forEachRangeInSphere(p, set.density_reach, kernel_.supportRadius(), false, visit);
+  if (candidates) {
+    for (std::size_t t = 0; t < count; ++t)
+      one(candidates[t]);
+    return sum;
+  }
+  // The cells the support's sphere reaches (the same samples pass, in the same order).
+  set.grid.forEachRangeInSphere(p, set.density_reach, kernel_.supportRadius(), false,
+                                [&](std::uint32_t lo, std::uint32_t hi) {
+                                  for (std::uint32_t k = lo; k < hi; ++k)
+                                    one(k);
+                                });
   return sum;
 }
 
@@ -123,10 +186,12 @@ void Boundaries::wallPass(const Fluid& fluid, const BodyPlacement& at, std::vect
       const double nu = with_shear ? st.kinematic_viscosity[i] : 0.0;
       double sum = 0.0;
       Vec3 a = Vec3::Zero();
-      if (has_static && (static_.near[static_.grid.cellIndex(xi)] & kNearDensity)) {
+      const auto [candidates, count] = staticCandidates(fluid, i);
+      if (candidates ? count > 0
+                     : has_static && (static_.near[static_.grid.cellIndex(xi)] & kNearDensity)) {
         Vec3 s = Vec3::Zero();
         open(0);
-        sum += wallSums(static_, xi, nu, vi, zero, s, nullptr, record);
+        sum += wallSums(static_, xi, nu, vi, zero, s, nullptr, record, candidates, count);
         close();
         a -= s;
       }

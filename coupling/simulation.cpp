@@ -369,6 +369,10 @@ void Simulation::findNeighbors() {
   removeOutsideDomain();
   fluid_->updateNeighbors();
   timings_.neighbors += secondsSince(t0);
+  // The static samples near each particle, listed again when the fluid's lists were.
+  const auto t1 = Clock::now();
+  boundaries_->prepareWallCandidates(*fluid_);
+  timings_.boundary += secondsSince(t1);
 }
 
 void Simulation::computeFluidForces() {

@@ -2,6 +2,9 @@
 #include "coupling/boundary.hpp"
 
 #include <gtest/gtest.h>
+#include <omp.h>
+
+#include <random>
 
 using namespace wake;
 
@@ -79,4 +82,70 @@ TEST(WallDensity, SampleVolumesMatchTheFluidLatticeOnAFlatFace) {
     }
   }
   EXPECT_GT(checked, 50u);
+}
+
+TEST(WallDensity, StaticCandidatesOfTheLastBuildGiveTheSearchsBits) {
+  // A fluid with a skin: the walls' pass over the static samples listed where the
+  // particles were at the lists' last build (prepareWallCandidates) gives the bits of the
+  // pass that searches the samples' grid, step after step as the particles move up to
+  // the skin's half, through builds, on one and two threads: densities, shear and the
+  // pairs it records. Two static bodies (a no-slip floor and a half-slip wall), particles
+  // at random near both.
+  FluidParams params;
+  params.particle_radius = 0.01;
+  params.speed_of_sound = 20.0;
+  const Aabb domain{Vec3(-0.3, -0.2, -0.3), Vec3(0.3, 0.3, 0.3)};
+  Boundaries searched(params, domain), listed(params, domain);
+  for (Boundaries* b : {&searched, &listed}) {
+    BodySettings floor;
+    floor.name = "floor";
+    floor.shape = makeBox(Vec3(0.2, 0.05, 0.2));
+    floor.pose.position = Vec3(0, -0.05, 0);  // top face at y = 0
+    b->addBody(floor);
+    BodySettings wall;
+    wall.name = "wall";
+    wall.slip = 0.5;
+    wall.shape = makeBox(Vec3(0.05, 0.2, 0.2));
+    wall.pose.position = Vec3(-0.15, 0.1, 0);  // face at x = -0.1
+    b->addBody(wall);
+    b->finalize();
+  }
+  const int threads_before = omp_get_max_threads();
+  for (int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    Fluid fluid(params, domain);
+    fluid.setNeighborSkin(0.1 * params.supportRadius());
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(0.0, 1.0), v(-1.0, 1.0);
+    for (std::uint32_t id = 0; id < 3000; ++id)
+      fluid.state().append(Vec3(-0.1 + 0.2 * u(rng), 0.15 * u(rng), -0.1 + 0.2 * u(rng)),
+                           Vec3(v(rng), v(rng), v(rng)), id, 1e-3);
+    const BodyPlacement at = listed.placeAtStart();
+    std::uint64_t builds = 0;
+    for (int step = 0; step < 40; ++step) {
+      fluid.updateNeighbors();
+      listed.prepareWallCandidates(fluid);
+      const std::size_t n = fluid.state().size();
+      std::vector<double> density_a(n, 0.0), density_b(n, 0.0);
+      std::vector<Vec3> shear_a, shear_b;
+      std::vector<Wrench> reaction_a, reaction_b;
+      WallPairs pairs_a, pairs_b;
+      searched.addWallTerms(fluid, at, density_a, shear_a, reaction_a, pairs_a);
+      listed.addWallTerms(fluid, at, density_b, shear_b, reaction_b, pairs_b);
+      ASSERT_EQ(density_a, density_b) << "step " << step << ", " << threads << " threads";
+      ASSERT_EQ(shear_a, shear_b) << "step " << step;
+      ASSERT_EQ(pairs_a.chunk, pairs_b.chunk) << "step " << step;
+      ASSERT_EQ(pairs_a.end, pairs_b.end) << "step " << step;
+      // Keep the particles in the box; a step of up to 0.35 mm (the skin is 4 mm).
+      for (std::size_t i = 0; i < n; ++i) {
+        Vec3& x = fluid.state().position[i];
+        x += 2e-4 * fluid.state().velocity[i];
+        x = x.cwiseMax(Vec3(-0.1, 0.0, -0.1)).cwiseMin(Vec3(0.1, 0.15, 0.1));
+      }
+      builds = fluid.neighborBuilds();
+    }
+    EXPECT_GE(builds, 3u) << "the lists were not built again: the test moved too little";
+    EXPECT_LE(builds, 20u);
+  }
+  omp_set_num_threads(threads_before);
 }
