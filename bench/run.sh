@@ -7,6 +7,9 @@
 #
 #   bench/run.sh [BUILD_DIR] [SIZES]     e.g. bench/run.sh build "100000 1000000"
 #
+# BENCH_ARGS adds options to every run, e.g. BENCH_ARGS="--skin 0" (neighbour lists built
+# every step, as before the skin).
+#
 # Time it on a quiet machine (no builds or other runs beside it): about 5 minutes.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,7 +22,8 @@ row() {  # row LABEL ARGS...: one benchmark run, one table row
   local label=$1
   shift
   local out
-  out=$("$bench" --threads 1,2 "$@")
+  # shellcheck disable=SC2086  # BENCH_ARGS: words on purpose
+  out=$("$bench" --threads 1,2 "$@" ${BENCH_ARGS:-})
   echo "$out" | awk -v label="$label" '
     $1 == "1" && NF >= 13 { n = $2; one = $6; split_ = sprintf("%s / %s / %s / %s / %s", $7, $8, $9, $10, $11) }
     $1 == "2" && NF >= 13 { two = $6 }
