@@ -163,11 +163,12 @@ class Boundaries {
                     WallPairs& pairs) const;
   /// For a fluid whose neighbour lists have a skin (Fluid::setNeighborSkin): lists, per
   /// particle, the static samples within support + skin / 2 of where the particle was at
-  /// the lists' last build (Fluid::neighborReference), again whenever they were built
-  /// since. While the fluid's lists stand, no particle is skin / 2 from there, so these
-  /// hold every static sample within its support: the walls' pass (addDensity,
-  /// addWallTerms) then reads them instead of searching the static grid, the same samples
-  /// in the same (ascending) order. Without a skin it does nothing and the pass searches.
+  /// the lists' last build (Fluid::neighborReference), again whenever that changed
+  /// (Fluid::neighborGeneration: a build, a restored reference). While the fluid's lists stand, no
+  /// particle is skin / 2 from there, so these hold every static sample within its support: the
+  /// walls' pass (addDensity, addWallTerms) then reads them instead of searching the static grid,
+  /// the same samples in the same (ascending) order. Without a skin it does nothing and the pass
+  /// searches.
   void prepareWallCandidates(const Fluid& fluid);
 
   /// Each sample's pressure, extrapolated from the fluid near it (Adami, Hu & Adams 2012,
@@ -400,7 +401,7 @@ class Boundaries {
   static constexpr std::size_t kChunk = 2048;
   mutable std::vector<Wrench> chunk_reaction_;  ///< scratch: (chunks x bodies)
   /// prepareWallCandidates' lists: particle i's static samples are
-  /// index[offset[i] .. offset[i + 1]), for `fluid` after its build number `build`.
+  /// index[offset[i] .. offset[i + 1]), for `fluid` at its neighborGeneration() `build`.
   struct WallCandidates {
     const Fluid* fluid = nullptr;
     std::uint64_t build = 0;

@@ -33,7 +33,8 @@ void Boundaries::prepareWallCandidates(const Fluid& fluid) {
     c.fluid = nullptr;
     return;
   }
-  if (c.fluid == &fluid && c.build == fluid.neighborBuilds() && c.offset.size() == n + 1) return;
+  if (c.fluid == &fluid && c.build == fluid.neighborGeneration() && c.offset.size() == n + 1)
+    return;
   // A sample within the support of a particle now is within support + skin / 2 of where
   // it was (it has moved less than skin / 2); a hair more for rounding.
   const double radius = (kernel_.supportRadius() + 0.5 * skin) * (1.0 + 1e-9);
@@ -66,13 +67,13 @@ void Boundaries::prepareWallCandidates(const Fluid& fluid) {
     each(static_cast<std::size_t>(i), [&](std::uint32_t k) { *out++ = k; });
   }
   c.fluid = &fluid;
-  c.build = fluid.neighborBuilds();
+  c.build = fluid.neighborGeneration();
 }
 
 std::pair<const std::uint32_t*, std::size_t> Boundaries::staticCandidates(const Fluid& fluid,
                                                                           std::size_t i) const {
   const WallCandidates& c = wall_candidates_;
-  if (c.fluid != &fluid || c.build != fluid.neighborBuilds() ||
+  if (c.fluid != &fluid || c.build != fluid.neighborGeneration() ||
       c.offset.size() != fluid.state().size() + 1)
     return {nullptr, 0};
   return {c.index.data() + c.offset[i], static_cast<std::size_t>(c.offset[i + 1] - c.offset[i])};

@@ -116,6 +116,7 @@ void Fluid::setNeighborSkin(double skin) {
   if (!(skin >= 0.0) || !std::isfinite(skin))
     throw std::invalid_argument("neighbour skin must be finite and >= 0");
   skin_ = skin;
+  ++generation_;
   candidates_ready_ = false;
   reference_.clear();
   reference_id_.clear();
@@ -124,6 +125,7 @@ void Fluid::setNeighborSkin(double skin) {
 void Fluid::restoreNeighborReference(std::vector<Vec3> position, std::vector<std::uint32_t> id) {
   reference_ = std::move(position);
   reference_id_ = std::move(id);
+  ++generation_;
   candidates_ready_ = false;
 }
 
@@ -165,6 +167,7 @@ void Fluid::updateNeighbors() {
     }
   }
   ++builds_;
+  ++generation_;
   fitGrid(state_.position, support + skin_);
   grid_.sort(state_.position, order_);
   state_.permute(order_, scratch_);

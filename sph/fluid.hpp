@@ -120,6 +120,9 @@ class Fluid {
   double neighborSkin() const { return skin_; }
   /// How many times updateNeighbors sorted and built (every call without a skin).
   std::uint64_t neighborBuilds() const { return builds_; }
+  /// Changes whenever the lists' reference does (a build, restoreNeighborReference,
+  /// setNeighborSkin): what lists kept beside them (Boundaries' wall candidates) check.
+  std::uint64_t neighborGeneration() const { return generation_; }
   /// The particles' positions and ids at the last build with a skin (empty without one):
   /// what decides the next build. restoreNeighborReference sets them again (a saved run's),
   /// so that a continued run builds where the uninterrupted one would (a reference that
@@ -182,6 +185,7 @@ class Fluid {
   bool candidates_ready_ = false;            ///< candidates_ are those of reference_
   double skin_ = 0;                          ///< m
   std::uint64_t builds_ = 0;                 ///< sorts and builds so far
+  std::uint64_t generation_ = 0;             ///< neighborGeneration()
   std::vector<Vec3> reference_;              ///< (n) m, positions at the last build (skin)
   std::vector<std::uint32_t> reference_id_;  ///< (n) ids at the last build (skin)
   std::vector<std::uint32_t> order_;         ///< (n) scratch: cell-sort permutation
