@@ -8,7 +8,7 @@
 // how many times less wall time the divergence-free solver needed.
 //
 //   wake_bench_solvers [--scene FILE] [--particles N] [--sim-time T] [--threads K]
-//                      [--dfsph-max-dt DT] [--solvers wcsph,dfsph]
+//                      [--dfsph-max-dt DT] [--solvers wcsph,dfsph] [--skin F]
 //
 // Defaults: bench/spheric2.json at its own resolution (~105k particles), 1 simulated
 // second, 1 thread, DFSPH's max_dt 1 ms.
@@ -38,12 +38,13 @@ struct Options {
   int threads = 1;
   double dfsph_max_dt = 1e-3;
   std::vector<std::string> solvers = {"wcsph", "dfsph"};
+  double skin = -1;  ///< --skin F: the neighbour lists' skin, F x the support (< 0: automatic)
 };
 
 [[noreturn]] void usage(const char* program, const std::string& msg) {
   std::fprintf(stderr,
                "error: %s\nusage: %s [--scene FILE] [--particles N] [--sim-time T] [--threads K]"
-               " [--dfsph-max-dt DT] [--solvers wcsph,dfsph]\n",
+               " [--dfsph-max-dt DT] [--solvers wcsph,dfsph] [--skin F]\n",
                msg.c_str(), program);
   std::exit(2);
 }
@@ -66,7 +67,10 @@ Options parse(int argc, char** argv) {
       o.threads = std::stoi(value("--threads"));
     else if (a == "--dfsph-max-dt")
       o.dfsph_max_dt = std::stod(value("--dfsph-max-dt"));
-    else if (a == "--solvers") {
+    else if (a == "--skin") {
+      o.skin = std::stod(value("--skin"));
+      if (!(o.skin >= 0) || !std::isfinite(o.skin)) usage(argv[0], "--skin must be >= 0");
+    } else if (a == "--solvers") {
       o.solvers.clear();
       std::stringstream ss(value("--solvers"));
       for (std::string s; std::getline(ss, s, ',');) {
@@ -110,6 +114,7 @@ int main(int argc, char** argv) {
       scene.sim.max_dt = opt.dfsph_max_dt;
       scene.sim.cfl = std::min(scene.sim.cfl, 0.6);
     }
+    if (opt.skin >= 0) scene.sim.neighbor_skin = opt.skin * scene.sim.fluid.supportRadius();
     SceneWorld world(scene.sim, scene.bodies);
     world.coupled().start();
     Simulation& sim = world.coupled().simulation();
