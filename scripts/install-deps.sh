@@ -4,10 +4,11 @@
 # ParaView's pvpython, and Xvfb for ParaView's rendering without a display).
 # Skips apt entirely when everything is already there.
 set -euo pipefail
+# libboost-dev: OpenVDB 10's headers include Boost's, which libopenvdb-dev does not pull in.
 packages=(cmake ninja-build g++ make pkg-config
   libeigen3-dev libbullet-dev libhdf5-dev nlohmann-json3-dev libcli11-dev
   libtinyobjloader-dev libgtest-dev libgmock-dev libbenchmark-dev
-  libstb-dev libopenvdb-dev gnuplot-nox ccache)
+  libstb-dev libopenvdb-dev libboost-dev gnuplot-nox ccache)
 if [ "${1:-}" = "--clients" ]; then
   packages+=(blender python3-paraview xvfb libgl1-mesa-dri)
 fi
