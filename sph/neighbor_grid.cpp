@@ -130,45 +130,27 @@ void buildBeforeLists(PairLists& out) {
   }
 }
 
-}  // namespace
-
-void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
-                    PairLists& out) {
-  const std::size_t n = points.size();
-  const double radius_sq = radius * radius;
-  const int threads = omp_get_max_threads();
-  const std::size_t ranges = static_cast<std::size_t>(threads);
-  out.range.resize(ranges + 1);
-  for (std::size_t r = 0; r <= ranges; ++r)
-    out.range[r] = n * r / ranges;
+/// Sizes `out` for n points in the ranges out.range holds and fills each range's later
+/// lists point by point: `row(r, i, local, used)` appends point i's later neighbours to
+/// `local` (range r's list, room made by `row`) from `used` and returns the new end. Then
+/// the span and the before lists (buildBeforeLists).
+template <class Row>
+void fillPairLists(std::size_t n, PairLists& out, Row row) {
+  const std::size_t ranges = out.ranges();
   out.later.resize(ranges);
   out.before_offset.resize(ranges);
   out.before.resize(ranges);
   out.begin.resize(n);
   out.count.resize(n);
   std::vector<std::size_t> spans(ranges, 0);
-#pragma omp parallel for schedule(static, 1) num_threads(threads)
+#pragma omp parallel for schedule(static, 1) num_threads(static_cast <int>(ranges))
   for (std::int64_t sr = 0; sr < static_cast<std::int64_t>(ranges); ++sr) {
-    // The later neighbours of the range's points (every pair tested once). Branch-free
-    // append: write every candidate, advance the cursor only for neighbours.
     const std::size_t r = static_cast<std::size_t>(sr);
     std::vector<std::uint32_t>& local = out.later[r];
     std::size_t used = 0, span = 0;
     for (std::size_t i = out.range[r]; i < out.range[r + 1]; ++i) {
-      const double xi = points[i][0], yi = points[i][1], zi = points[i][2];
       const std::size_t before = used;
-      grid.forEachRangeInSphere(
-          points[i], grid.reach(), radius, true, [&](std::uint32_t b, std::uint32_t e) {
-            if (b <= i) b = static_cast<std::uint32_t>(i + 1);  // the ranges ascend: j > i only
-            if (b >= e) return;
-            // Grown by a quarter (the buffer stays for the next steps: doubling left up to
-            // twice the lists' size unused).
-            if (local.size() < used + (e - b))
-              local.resize(used + (e - b) + std::max<std::size_t>(used / 4, 4096));
-            std::uint32_t* dst = local.data();
-            for (std::uint32_t j = b; j < e; ++j)
-              used = appendIfWithin(points[j], j, xi, yi, zi, radius_sq, dst, used);
-          });
+      used = row(r, i, local, used);
       out.begin[i] = before;
       out.count[i] = static_cast<std::uint32_t>(used - before);
       if (used > before) span = std::max<std::size_t>(span, local[used - 1] - i);
@@ -179,44 +161,58 @@ void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, do
   buildBeforeLists(out);
 }
 
+}  // namespace
+
+void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
+                    PairLists& out) {
+  const std::size_t n = points.size();
+  const double radius_sq = radius * radius;
+  const std::size_t ranges = static_cast<std::size_t>(omp_get_max_threads());
+  out.range.resize(ranges + 1);
+  for (std::size_t r = 0; r <= ranges; ++r)
+    out.range[r] = n * r / ranges;
+  // The later neighbours of each point (every pair tested once). Branch-free append: write
+  // every candidate, advance the cursor only for neighbours.
+  fillPairLists(
+      n, out, [&](std::size_t, std::size_t i, std::vector<std::uint32_t>& local, std::size_t used) {
+        const double xi = points[i][0], yi = points[i][1], zi = points[i][2];
+        grid.forEachRangeInSphere(
+            points[i], grid.reach(), radius, true, [&](std::uint32_t b, std::uint32_t e) {
+              if (b <= i) b = static_cast<std::uint32_t>(i + 1);  // j > i only
+              if (b >= e) return;
+              // Grown by a quarter (the buffer stays for the next steps: doubling
+              // left up to twice the lists' size unused).
+              if (local.size() < used + (e - b))
+                local.resize(used + (e - b) + std::max<std::size_t>(used / 4, 4096));
+              std::uint32_t* dst = local.data();
+              for (std::uint32_t j = b; j < e; ++j)
+                used = appendIfWithin(points[j], j, xi, yi, zi, radius_sq, dst, used);
+            });
+        return used;
+      });
+}
+
 void filterPairLists(const PairLists& candidates, const std::vector<Vec3>& points, double radius,
                      PairLists& out) {
   const std::size_t n = points.size();
   if (candidates.size() != n || candidates.ranges() == 0)
     throw std::logic_error("filterPairLists: the candidates are for another number of points");
   const double radius_sq = radius * radius;
-  const std::size_t ranges = candidates.ranges();
   out.range = candidates.range;
-  out.later.resize(ranges);
-  out.before_offset.resize(ranges);
-  out.before.resize(ranges);
-  out.begin.resize(n);
-  out.count.resize(n);
-  std::vector<std::size_t> spans(ranges, 0);
-#pragma omp parallel for schedule(static, 1) num_threads(static_cast <int>(ranges))
-  for (std::int64_t sr = 0; sr < static_cast<std::int64_t>(ranges); ++sr) {
-    // Each candidate list kept in its order, without the pairs now `radius` or farther
-    // apart (the same test as buildPairLists'); the kept ones fit in the candidates' room.
-    const std::size_t r = static_cast<std::size_t>(sr);
-    const std::vector<std::uint32_t>& from = candidates.later[r];
-    std::vector<std::uint32_t>& local = out.later[r];
-    if (local.size() < from.size()) local.resize(from.size());
-    std::uint32_t* dst = local.data();
-    std::size_t used = 0, span = 0;
-    for (std::size_t i = candidates.range[r]; i < candidates.range[r + 1]; ++i) {
-      const double xi = points[i][0], yi = points[i][1], zi = points[i][2];
-      const std::size_t before = used;
-      const std::uint32_t* list = from.data() + candidates.begin[i];
-      for (std::uint32_t k = 0, m = candidates.count[i]; k < m; ++k)
-        used = appendIfWithin(points[list[k]], list[k], xi, yi, zi, radius_sq, dst, used);
-      out.begin[i] = before;
-      out.count[i] = static_cast<std::uint32_t>(used - before);
-      if (used > before) span = std::max<std::size_t>(span, local[used - 1] - i);
-    }
-    spans[r] = span;
-  }
-  out.span = ranges ? *std::max_element(spans.begin(), spans.end()) : 0;
-  buildBeforeLists(out);
+  // Each candidate list kept in its order, without the pairs now `radius` or farther apart
+  // (the same test as buildPairLists'); the kept ones fit in the candidates' room.
+  fillPairLists(
+      n, out,
+      [&](std::size_t r, std::size_t i, std::vector<std::uint32_t>& local, std::size_t used) {
+        const std::vector<std::uint32_t>& from = candidates.later[r];
+        if (i == candidates.range[r] && local.size() < from.size()) local.resize(from.size());
+        const double xi = points[i][0], yi = points[i][1], zi = points[i][2];
+        const std::uint32_t* list = from.data() + candidates.begin[i];
+        std::uint32_t* dst = local.data();
+        for (std::uint32_t k = 0, m = candidates.count[i]; k < m; ++k)
+          used = appendIfWithin(points[list[k]], list[k], xi, yi, zi, radius_sq, dst, used);
+        return used;
+      });
 }
 
 void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
