@@ -159,17 +159,19 @@ void Boundaries::buildSet(SampleSet& set, const Aabb& box, const std::vector<Vec
   set.near.clear();
   if (!flags) return;
   set.near.assign(set.grid.cellCount(), 0);
+  markNear(set, set.density_reach, kNearDensity, set.near);
+  markNear(set, set.contact_reach, kNearContact, set.near);
+}
+
+void Boundaries::markNear(const SampleSet& set, int reach, std::uint8_t bit,
+                          std::vector<std::uint8_t>& near) {
   const Eigen::Vector3i dims = set.grid.dims();
-  auto mark = [&](const Eigen::Vector3i& c, int reach, std::uint8_t bit) {
+  for (const Vec3& p : set.position) {
+    const Eigen::Vector3i c = set.grid.cellCoord(p);
     for (int z = std::max(0, c[2] - reach); z <= std::min(dims[2] - 1, c[2] + reach); ++z)
       for (int y = std::max(0, c[1] - reach); y <= std::min(dims[1] - 1, c[1] + reach); ++y)
         for (int x = std::max(0, c[0] - reach); x <= std::min(dims[0] - 1, c[0] + reach); ++x)
-          set.near[set.grid.cellIndex(Eigen::Vector3i(x, y, z))] |= bit;
-  };
-  for (std::size_t k = 0; k < total; ++k) {
-    const Eigen::Vector3i c = set.grid.cellCoord(set.position[k]);
-    mark(c, set.density_reach, kNearDensity);
-    mark(c, set.contact_reach, kNearContact);
+          near[set.grid.cellIndex(Eigen::Vector3i(x, y, z))] |= bit;
   }
 }
 

@@ -299,6 +299,11 @@ class Boundaries {
   /// bit 4: the cell lies inside the body (the static set: inside some static body),
   /// beyond contact reach of its surface.
   static constexpr std::uint8_t kNearDensity = 1, kNearContact = 2, kInterior = 4;
+  /// Sets `bit` in near[cell] (near: one byte per cell of set.grid) for every cell within
+  /// `reach` cells of a sample's cell: from anywhere else no sample is within reach x the
+  /// cell size.
+  static void markNear(const SampleSet& set, int reach, std::uint8_t bit,
+                       std::vector<std::uint8_t>& near);
   /// Sets kInterior on the cells of a moving body's `set` (body space) that are not near
   /// its samples and whose centre is inside the body.
   void markInterior(SampleSet& set, const Body& body);
@@ -407,6 +412,9 @@ class Boundaries {
     std::uint64_t build = 0;
     std::vector<std::uint64_t> offset;  ///< (n + 1)
     std::vector<std::uint32_t> index;
+    /// (static grid's cells) non-zero where a sample may lie within `reach` cells.
+    std::vector<std::uint8_t> near;
+    int reach = 0;
   };
   WallCandidates wall_candidates_;
   /// The static samples of particle i from wall_candidates_ ({nullptr, 0}: search them).
