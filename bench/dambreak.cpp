@@ -107,6 +107,7 @@ int main(int argc, char** argv) {
     const std::uint64_t iterations0 = sim.densityIterations();
     const std::uint64_t divergence0 = sim.divergenceIterations();
     const std::uint64_t builds0 = sim.fluid().neighborBuilds();
+    const std::uint64_t skinned0 = sim.fluid().neighborSkinnedBuilds();
     const auto t0 = std::chrono::steady_clock::now();
     for (int i = 0; i < opt.steps; ++i)
       sim.step(1e9);
@@ -121,9 +122,12 @@ int main(int argc, char** argv) {
                 100 * t.neighbors / total, 100 * t.density / total, 100 * t.forces / total,
                 100 * t.boundary / total, 100 * t.integration / total, sim.time(),
                 static_cast<unsigned long long>(stateHash(sim)));
-    std::printf("# neighbour lists sorted and built at %llu of %d steps (skin %.3g m)\n",
-                static_cast<unsigned long long>(sim.fluid().neighborBuilds() - builds0), opt.steps,
-                sim.fluid().neighborSkin());
+    std::printf(
+        "# neighbour lists sorted and built at %llu of %d steps, %llu of them with the skin "
+        "(%.3g m)\n",
+        static_cast<unsigned long long>(sim.fluid().neighborBuilds() - builds0), opt.steps,
+        static_cast<unsigned long long>(sim.fluid().neighborSkinnedBuilds() - skinned0),
+        sim.fluid().neighborSkin());
     if (opt.dfsph) {
       const double it = double(sim.densityIterations() - iterations0) / opt.steps;
       const double itv = double(sim.divergenceIterations() - divergence0) / opt.steps;

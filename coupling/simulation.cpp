@@ -367,7 +367,7 @@ void Simulation::findNeighbors() {
   currentStates(work_.body_now);
   boundaries_->place(work_.body_now, work_.placed);
   removeOutsideDomain();
-  fluid_->updateNeighbors();
+  fluid_->updateNeighbors(data_.run.last_dt);
   timings_.neighbors += secondsSince(t0);
   // The static samples near each particle, listed again when the fluid's lists were.
   const auto t1 = Clock::now();

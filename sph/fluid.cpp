@@ -156,7 +156,20 @@ bool Fluid::movedFromReference() const {
   return moved != 0;
 }
 
-void Fluid::updateNeighbors() {
+bool Fluid::skinPays(double dt) const {
+  if (!(skin_ > 0.0)) return false;
+  double v_sq = 0.0;
+  const std::int64_t sn = static_cast<std::int64_t>(state_.size());
+#pragma omp parallel for schedule(static) reduction(max : v_sq)
+  for (std::int64_t i = 0; i < sn; ++i)
+    v_sq = std::max(v_sq, state_.velocity[i].squaredNorm());
+  // NaN speeds compare false: skinned, and the health check reports them as before.
+  return !(std::sqrt(v_sq) * dt * 2.0 * kMinSkinSteps > skin_);
+}
+
+void Fluid::updateNeighbors(double dt) {
+  if (!(dt >= 0.0) || !std::isfinite(dt))
+    throw std::invalid_argument("updateNeighbors: dt must be finite and >= 0");
   const double support = kernel_.supportRadius();
   if (skin_ > 0.0 && !reference_.empty()) {
     if (!candidates_ready_ && reference_.size() == state_.size())
@@ -168,13 +181,19 @@ void Fluid::updateNeighbors() {
   }
   ++builds_;
   ++generation_;
-  fitGrid(state_.position, support + skin_);
+  const bool skinned = skinPays(dt);
+  fitGrid(state_.position, support + (skinned ? skin_ : 0.0));
   grid_.sort(state_.position, order_);
   state_.permute(order_, scratch_);
-  if (!(skin_ > 0.0)) {
+  if (!skinned) {
+    // No reference: the next call builds again.
+    reference_.clear();
+    reference_id_.clear();
+    candidates_ready_ = false;
     buildPairLists(grid_, state_.position, support, neighbors_);
     return;
   }
+  ++skinned_builds_;
   reference_ = state_.position;
   reference_id_ = state_.id;
   buildPairLists(grid_, state_.position, support + skin_, candidates_);

@@ -113,17 +113,31 @@ class Fluid {
   /// order and takes the pairs from the candidates (filterPairLists): the same pairs in
   /// the same order as a build in that order would give. Particles outside the domain must
   /// have been removed before.
-  void updateNeighbors();
+  /// `dt` (s, finite, >= 0): the step the particles move by between calls (the last one
+  /// taken: a guess of the next). A build lists candidates only when the skin pays: when
+  /// the fastest particle, at its speed now, needs kMinSkinSteps such steps or more to
+  /// cross half the skin (v_max dt <= skin / (2 kMinSkinSteps); always with dt = 0). In a
+  /// flow too fast for that (the lists would be built again a step or two later, each time
+  /// a search over the larger radius and a filter) the build searches the support alone,
+  /// as without a skin, and the next call builds again. The choice depends only on the
+  /// state and dt, so a run continued from a saved state chooses as the uninterrupted one.
+  /// Throws std::invalid_argument for a negative or non-finite dt.
+  void updateNeighbors(double dt = 0.0);
+  /// See updateNeighbors: how many steps a skin must last to be built.
+  static constexpr double kMinSkinSteps = 2.5;
   /// The neighbour lists' skin (m, finite, >= 0; 0, the default: sorted and built every
   /// call). Takes effect at the next build. Throws std::invalid_argument otherwise.
   void setNeighborSkin(double skin);
   double neighborSkin() const { return skin_; }
-  /// How many times updateNeighbors sorted and built (every call without a skin).
+  /// How many times updateNeighbors sorted and built (every call without a skin), and how
+  /// many of those builds listed candidates within the skin.
   std::uint64_t neighborBuilds() const { return builds_; }
+  std::uint64_t neighborSkinnedBuilds() const { return skinned_builds_; }
   /// Changes whenever the lists' reference does (a build, restoreNeighborReference,
   /// setNeighborSkin): what lists kept beside them (Boundaries' wall candidates) check.
   std::uint64_t neighborGeneration() const { return generation_; }
-  /// The particles' positions and ids at the last build with a skin (empty without one):
+  /// The particles' positions and ids at the last build with a skin (empty without one,
+  /// or when the last build did not list candidates):
   /// what decides the next build. restoreNeighborReference sets them again (a saved run's),
   /// so that a continued run builds where the uninterrupted one would (a reference that
   /// does not fit the particles, or is not in their grid order, means a build).
@@ -185,6 +199,7 @@ class Fluid {
   bool candidates_ready_ = false;            ///< candidates_ are those of reference_
   double skin_ = 0;                          ///< m
   std::uint64_t builds_ = 0;                 ///< sorts and builds so far
+  std::uint64_t skinned_builds_ = 0;         ///< of those, with candidates in the skin
   std::uint64_t generation_ = 0;             ///< neighborGeneration()
   std::vector<Vec3> reference_;              ///< (n) m, positions at the last build (skin)
   std::vector<std::uint32_t> reference_id_;  ///< (n) ids at the last build (skin)
@@ -202,6 +217,9 @@ class Fluid {
   /// Whether some particle moved skin / 2 or more from reference_, or the particles
   /// are not those of reference_.
   bool movedFromReference() const;
+  /// Whether a build now should list candidates: a skin, and the fastest particle needs
+  /// kMinSkinSteps steps of dt to cross half of it.
+  bool skinPays(double dt) const;
 };
 
 }  // namespace wake

@@ -275,3 +275,80 @@ TEST(Neighbors, SkinKeepsThePairsAndDensitiesAndBuildsLessOften) {
   EXPECT_LE(skinned.neighborBuilds(), std::uint64_t(steps / 4));
   EXPECT_THROW(skinned.setNeighborSkin(-1.0), std::invalid_argument);
 }
+
+TEST(Neighbors, SkinIsListedOnlyWhenItLastsSeveralSteps) {
+  // The skin is listed at a build only when the fastest particle needs kMinSkinSteps steps
+  // of dt or more to cross half of it. A block moving slowly, then too fast for the skin,
+  // then slowly again: skinned builds now and then, then a plain build at every call
+  // (no reference kept), then skinned builds again; the pairs always those of lists built
+  // at every call.
+  FluidParams params = testParams();
+  const double skin = 0.1 * params.supportRadius(), dt = 2e-4;
+  const double v_star = skin / (2.0 * Fluid::kMinSkinSteps * dt);  // the border speed
+  Fluid every(params, kDomain), skinned(params, kDomain);
+  skinned.setNeighborSkin(skin);
+  std::mt19937 rng(43);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (Fluid* f : {&every, &skinned})
+    fillLattice(*f, 8, 0.019);
+  // Unit velocities, the largest exactly 1 (scaled per phase).
+  std::vector<Vec3> unit(every.state().size());
+  double largest = 0.0;
+  for (Vec3& v : unit) {
+    v = Vec3(u(rng), u(rng), u(rng));
+    largest = std::max(largest, v.norm());
+  }
+  for (Vec3& v : unit)
+    v /= largest;
+  auto setSpeed = [&](double v_max) {
+    for (Fluid* f : {&every, &skinned})
+      for (std::size_t i = 0; i < f->state().size(); ++i)
+        f->state().velocity[i] = v_max * unit[f->state().id[i]];
+  };
+  auto run = [&](int steps) {
+    for (int step = 0; step < steps; ++step) {
+      for (Fluid* f : {&every, &skinned})
+        f->updateNeighbors(dt);
+      ASSERT_EQ(pairsById(skinned), pairsById(every)) << "step " << step;
+      for (Fluid* f : {&every, &skinned})
+        for (std::size_t i = 0; i < f->state().size(); ++i)
+          f->state().position[i] += dt * f->state().velocity[i];
+    }
+  };
+  setSpeed(0.999 * v_star);
+  run(30);
+  const std::uint64_t slow_builds = skinned.neighborBuilds();
+  EXPECT_EQ(skinned.neighborSkinnedBuilds(), slow_builds);
+  EXPECT_GE(slow_builds, 3u);
+  EXPECT_LE(slow_builds, 30u / 2);
+  EXPECT_FALSE(skinned.neighborReference().empty());
+
+  setSpeed(1.001 * v_star);
+  run(20);
+  // At most one skinned build at the new speed is left from before; then none.
+  const std::uint64_t fast_skinned = skinned.neighborSkinnedBuilds();
+  EXPECT_EQ(fast_skinned, slow_builds);
+  EXPECT_GE(skinned.neighborBuilds() - slow_builds, 17u);  // the old lists last < 3 calls
+  const std::uint64_t builds = skinned.neighborBuilds();
+  run(5);
+  EXPECT_EQ(skinned.neighborBuilds(), builds + 5) << "a plain build lasts one call";
+  EXPECT_EQ(skinned.neighborSkinnedBuilds(), fast_skinned);
+  EXPECT_TRUE(skinned.neighborReference().empty());
+
+  setSpeed(0.5 * v_star);
+  run(20);
+  EXPECT_GT(skinned.neighborSkinnedBuilds(), fast_skinned) << "the skin is listed again";
+  EXPECT_LE(skinned.neighborBuilds(), builds + 5 + 20 / 2);
+
+  // dt = 0 (no step known): always the skin, however fast.
+  setSpeed(100 * v_star);
+  const std::uint64_t before = skinned.neighborSkinnedBuilds();
+  for (int k = 0; k < 3; ++k) {
+    for (std::size_t i = 0; i < skinned.state().size(); ++i)
+      skinned.state().position[i] += dt * skinned.state().velocity[i];
+    skinned.updateNeighbors();
+  }
+  EXPECT_EQ(skinned.neighborSkinnedBuilds(), before + 3);
+  EXPECT_THROW(skinned.updateNeighbors(-dt), std::invalid_argument);
+  EXPECT_THROW(skinned.updateNeighbors(std::nan("")), std::invalid_argument);
+}
