@@ -63,10 +63,10 @@ struct SolverSettings {
   HealthLimits health;
   /// m, finite: the skin of the fluid's neighbour lists (Fluid::setNeighborSkin: the
   /// particles sorted and the lists built only when one has moved half of it). < 0
-  /// (default): automatic, kAutoSkin x the support radius with Wcsph (its steps move a
-  /// particle a few hundredths of the support), 0 with Dfsph (steps up to ten times
-  /// longer: the lists would be built at nearly every step). The skin changes only where
-  /// the particles lie in memory, so the order of the sums: not the physics.
+  /// (default): automatic, kAutoSkin x the support radius, with either solver: a build
+  /// lists it only where it will last (Fluid::updateNeighbors: DFSPH's longer steps in a
+  /// fast flow search every step, as without a skin). The skin changes only where the
+  /// particles lie in memory, so the order of the sums: not the physics.
   double neighbor_skin = -1.0;
   static constexpr double kAutoSkin = 0.1;
 };
