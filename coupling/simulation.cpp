@@ -185,9 +185,8 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
   require(rigid_->count() == s.bodies.size(), "bodies",
           "the rigid-body integrator has a different number of bodies");
   fluid_ = std::make_unique<Fluid>(s.fluid, s.domain, &data_.fluid);
-  fluid_->setNeighborSkin(s.neighbor_skin >= 0
-                              ? s.neighbor_skin
-                              : SolverSettings::kAutoSkin * s.fluid.supportRadius());
+  fluid_->setNeighborSkin(
+      s.neighbor_skin >= 0 ? s.neighbor_skin : SolverSettings::kAutoSkin * s.fluid.supportRadius());
   if (s.solver == FluidSolver::Dfsph) dfsph_ = std::make_unique<DivergenceFreeSolver>(s.dfsph);
   boundaries_ = std::make_unique<Boundaries>(s.fluid, s.domain);
   for (const BodySettings& b : s.bodies)
