@@ -35,12 +35,15 @@ class UniformGrid {
   const Eigen::Vector3i& dims() const { return dims_; }
   std::size_t cellCount() const { return static_cast<std::size_t>(dims_.prod()); }
 
-  /// Integer cell coordinates of p, clamped into the grid.
+  /// Integer cell coordinates of p, clamped into the grid (NaN: cell 0).
   Eigen::Vector3i cellCoord(const Vec3& p) const {
     Eigen::Vector3i c;
     for (int k = 0; k < 3; ++k) {
-      int v = static_cast<int>(std::floor((p[k] - origin_[k]) * inv_cell_));
-      c[k] = v < 0 ? 0 : (v >= dims_[k] ? dims_[k] - 1 : v);
+      // Clamped first, then truncated: truncation is floor from 0 up, and no floor (a
+      // branch per axis in the code GCC makes without SSE4.1) is needed.
+      const double t = (p[k] - origin_[k]) * inv_cell_;
+      const double last = static_cast<double>(dims_[k] - 1);
+      c[k] = static_cast<int>(t >= 0.0 ? (t < last ? t : last) : 0.0);
     }
     return c;
   }

@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <functional>
 #include <random>
@@ -156,6 +157,36 @@ TEST(Neighbors, PointsOnCellBorders) {
 TEST(Neighbors, OutsideDomainIsClampedNotLost) {
   std::vector<Vec3> x = {Vec3(1.2, 0, 0), Vec3(0.98, 0, 0), Vec3(-1.0, -1.0, -1.0)};
   expectMatchesBruteForce(x, kCube, 0.3);
+}
+
+TEST(Neighbors, CellCoordinatesAreTheFloorClampedIntoTheGrid) {
+  // floor((p - origin) / cell) clamped to [0, dims - 1] on each axis: points inside, on
+  // cell faces, just below zero (-0.5 cell: floor -1, clamped to 0), beyond either side,
+  // -0.0, and NaN (cell 0).
+  const UniformGrid grid(kCube, 0.3);
+  const Eigen::Vector3i dims = grid.dims();
+  const double cell = grid.cellSize();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  std::vector<Vec3> points;
+  for (int t = 0; t < 2000; ++t)
+    points.push_back(Vec3(u(rng), u(rng), u(rng)));
+  for (int k = -3; k <= dims.maxCoeff() + 3; ++k)
+    points.push_back(Vec3::Constant(-1.0 + k * cell));
+  points.push_back(Vec3::Constant(-1.0 - 0.5 * cell));
+  points.push_back(Vec3(-0.0, 1e300, -1e300));
+  for (const Vec3& p : points) {
+    const Eigen::Vector3i c = grid.cellCoord(p);
+    for (int k = 0; k < 3; ++k) {
+      const double f = std::floor((p[k] - -1.0) * (1.0 / cell));
+      const int expect = f < 0 ? 0 : (f > dims[k] - 1 ? dims[k] - 1 : int(f));
+      EXPECT_EQ(c[k], expect) << p.transpose() << " axis " << k;
+    }
+  }
+  const Eigen::Vector3i nan = grid.cellCoord(Vec3::Constant(std::nan("")));
+  EXPECT_EQ(nan, Eigen::Vector3i::Zero());
+  EXPECT_EQ(grid.cellCoord(Vec3::Constant(1e300)), (dims - Eigen::Vector3i::Ones()).eval());
+  EXPECT_EQ(grid.cellCoord(Vec3::Constant(-1e300)), Eigen::Vector3i::Zero());
 }
 
 TEST(Neighbors, EmptyAndSingle) {
