@@ -278,7 +278,9 @@ class TankShape final : public Shape {
     const double to_wall_plane =
         std::min({p.x() - min_.x(), max_.x() - p.x(), p.z() - min_.z(), max_.z() - p.z()});
     const double above_rim = std::max(0.0, p.y() - max_.y());
-    return std::min(to_floor, std::hypot(to_wall_plane, above_rim));
+    // hypot(a, 0) is a exactly: below the rim (where the fluid is) no hypot call.
+    return std::min(to_floor,
+                    above_rim > 0.0 ? std::hypot(to_wall_plane, above_rim) : to_wall_plane);
   }
 
   Aabb bounds(const Aabb&) const override { return Aabb{outer_min_, outer_max_}; }

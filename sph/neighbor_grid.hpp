@@ -17,6 +17,17 @@
 
 namespace wake {
 
+/// t clamped into [0, last] (NaN: 0), without a branch.
+inline double clampToCells(double t, double last) {
+#if defined(__SSE2__)
+  // maxsd gives its second operand when one is NaN.
+  return _mm_cvtsd_f64(_mm_min_sd(_mm_max_sd(_mm_set_sd(t), _mm_setzero_pd()), _mm_set_sd(last)));
+#else
+  const double above = 0.0 < t ? t : 0.0;
+  return above < last ? above : last;
+#endif
+}
+
 class UniformGrid {
  public:
   UniformGrid() = default;
@@ -39,17 +50,6 @@ class UniformGrid {
   const Eigen::Vector3i& dims() const { return dims_; }
   std::size_t cellCount() const { return static_cast<std::size_t>(dims_.prod()); }
 
-  /// t clamped into [0, last] (NaN: 0), without a branch.
-  static double clampCell(double t, double last) {
-#if defined(__SSE2__)
-    // maxsd gives its second operand when one is NaN.
-    return _mm_cvtsd_f64(
-        _mm_min_sd(_mm_max_sd(_mm_set_sd(t), _mm_setzero_pd()), _mm_set_sd(last)));
-#else
-    const double above = 0.0 < t ? t : 0.0;
-    return above < last ? above : last;
-#endif
-  }
   /// Integer cell coordinates of p, clamped into the grid (NaN: cell 0).
   Eigen::Vector3i cellCoord(const Vec3& p) const {
     Eigen::Vector3i c;
@@ -58,7 +58,7 @@ class UniformGrid {
       // branch per axis in the code GCC makes without SSE4.1) is needed.
       const double t = (p[k] - origin_[k]) * inv_cell_;
       const double last = static_cast<double>(dims_[k] - 1);
-      c[k] = static_cast<int>(clampCell(t, last));
+      c[k] = static_cast<int>(clampToCells(t, last));
     }
     return c;
   }
