@@ -208,13 +208,15 @@ void Boundaries::markInterior(SampleSet& set, const Body& body) {
 }
 
 void Boundaries::markStaticInterior() {
-  // The static set's grid covers the whole domain: inside some static body or outside all.
+  // Cells beyond contact reach of every static sample: inside some static body or outside
+  // all. The exact shapes alone: a body's world_bounds are clipped to the domain (a plane's
+  // half space), so a run of cells that starts beyond the domain would take its first
+  // cell's "outside the bounds" for the whole run (a particle 20 cm inside a ground plane
+  // was not counted).
   markInteriorRuns(static_, [&](const Vec3& p) {
     for (std::uint32_t b : static_bodies_) {
       const Body& body = bodies_[b];
-      if (body.start.world_bounds.contains(p) &&
-          body.settings.shape->contains(body.start.pose.toBody(p)))
-        return true;
+      if (body.settings.shape->contains(body.start.pose.toBody(p))) return true;
     }
     return false;
   });
@@ -234,12 +236,23 @@ void Boundaries::finalize() {
       nrm.push_back(b.settings.pose.rotate(b.local.normal[k]));
       owner.push_back(static_cast<std::uint32_t>(bi));
     }
-    b.local.clear();
+    b.local = {};  // its memory too
   }
   for (std::size_t bi = 0; bi < bodies_.size(); ++bi)
     if (!bodies_[bi].settings.moves()) static_bodies_.push_back(static_cast<std::uint32_t>(bi));
   if (!pos.empty()) {
-    buildSet(static_, domain_, pos, nrm, owner, /*flags=*/true);
+    // The static set's grid covers what lies within kStaticMargin of its samples (and of
+    // the domain): every query a particle makes of them. Beyond it no static sample is
+    // that close (the queries check reach_box first); the domain's empty space costs no
+    // cells (a domain-sized grid took 6 bytes per cell of it).
+    Aabb near_samples;
+    for (const Vec3& p : pos)
+      near_samples.extend(p);
+    const double margin = kStaticMargin * kernel_.supportRadius();
+    const Aabb around = near_samples.grown(margin), domain = domain_.grown(margin);
+    Aabb box{around.min.cwiseMax(domain.min), around.max.cwiseMin(domain.max)};
+    if (box.empty()) box = around;  // every sample far outside the domain
+    buildSet(static_, box, pos, nrm, owner, /*flags=*/true);
     markStaticInterior();
   }
   // Moving bodies: one body-space set each.
@@ -256,7 +269,7 @@ void Boundaries::finalize() {
                std::vector<std::uint32_t>(b.local.size(), m.body), /*flags=*/true);
       markInterior(m.samples, b);
     }
-    b.local.clear();
+    b.local = {};  // its memory too
     b.moving = static_cast<std::int32_t>(moving_.size());
     moving_.push_back(std::move(m));
     b.start =
@@ -310,7 +323,7 @@ void Boundaries::worldSamples(const BodyPlacement& at, std::vector<Vec3>& positi
 
 template <class F>
 void Boundaries::forEachBodyDistance(const Vec3& x, const BodyPlacement& at, F&& f) const {
-  if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
+  if (nearStatic(x, kNearContact)) {
     for (const std::uint32_t bi : static_bodies_) {
       const BodyFrame& frame = at[bi];
       if (frame.contact_bounds.contains(x))
@@ -427,7 +440,9 @@ std::size_t Boundaries::countInside(const std::vector<Vec3>& x, const BodyPlacem
     // A cell beyond contact reach of every sample lies wholly inside or wholly outside
     // (its kInterior flag): only the cells near a surface need the exact shapes.
     if (has_static) {
-      // Outside the grid's box (not where fluid is): the exact shapes too.
+      // Outside the grid's box (no static sample within kStaticMargin supports): the
+      // exact shapes, which their bounds reject but for a body the samples do not enclose
+      // (a shape clipped to the domain).
       const std::uint8_t flags =
           static_.reach_box.contains(xi) ? static_.near[static_.grid.cellIndex(xi)] : kNearContact;
       if (flags & kNearContact) {

@@ -125,6 +125,11 @@ class Boundaries {
   /// A body as it was added (its pose and velocities are the start's).
   const BodySettings& body(std::size_t b) const { return bodies_[b].settings; }
   std::size_t sampleCount() const;
+  /// Cells of the static samples' grid (their bounds grown by kStaticMargin supports, not
+  /// the whole domain); 0 without static samples.
+  std::size_t staticGridCells() const {
+    return static_.position.empty() ? 0 : static_.grid.cellCount();
+  }
   std::size_t bodySampleCount(std::size_t b) const { return bodies_[b].sample_count; }
   /// Largest distance of a body's samples from its origin (m): bounds surface speeds.
   double bodyExtent(std::size_t b) const { return bodies_[b].extent; }
@@ -299,6 +304,15 @@ class Boundaries {
   /// bit 4: the cell lies inside the body (the static set: inside some static body),
   /// beyond contact reach of its surface.
   static constexpr std::uint8_t kNearDensity = 1, kNearContact = 2, kInterior = 4;
+  /// The static set's grid covers its samples' bounds grown by this many kernel supports
+  /// (and buildSet's one more), within the domain grown as much.
+  static constexpr double kStaticMargin = 2.0;
+  /// Whether static samples may lie within the reach `bit` flags of x (false without
+  /// static samples, or outside their grid's box).
+  bool nearStatic(const Vec3& x, std::uint8_t bit) const {
+    return !static_.position.empty() && static_.reach_box.contains(x) &&
+           (static_.near[static_.grid.cellIndex(x)] & bit);
+  }
   /// Sets `bit` in near[cell] (near: one byte per cell of set.grid) for every cell within
   /// `reach` cells of a sample's cell: from anywhere else no sample is within reach x the
   /// cell size.
@@ -439,7 +453,7 @@ inline void Boundaries::forEachContactCandidate(const SampleSet& set, const Vec3
 
 template <class F>
 inline void Boundaries::forEachSampleNear(const Vec3& x, const BodyPlacement& at, F&& f) const {
-  if (!static_.position.empty() && (static_.near[static_.grid.cellIndex(x)] & kNearContact)) {
+  if (nearStatic(x, kNearContact)) {
     forEachContactCandidate(static_, x, [&](std::uint32_t k, double d_sq) {
       f(static_.body[k], static_.position[k], x, d_sq, static_cast<const Mat3*>(nullptr),
         static_cast<const Vec3*>(nullptr));

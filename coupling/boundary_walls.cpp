@@ -29,15 +29,18 @@ void Boundaries::prepareWallCandidates(const Fluid& fluid) {
   const double skin = fluid.neighborSkin();
   const std::vector<Vec3>& x = fluid.neighborReference();
   const std::size_t n = x.size();
-  if (!(skin > 0.0) || static_.position.empty() || n != fluid.state().size()) {
+  // A sample within the support of a particle now is within support + skin / 2 of where
+  // it was (it has moved less than skin / 2); a hair more for rounding.
+  const double radius = (kernel_.supportRadius() + 0.5 * skin) * (1.0 + 1e-9);
+  // Beyond the static grid's box no sample is within (kStaticMargin + 1) supports: a
+  // larger radius (a skin over 4 supports) searches instead.
+  if (!(skin > 0.0) || static_.position.empty() || n != fluid.state().size() ||
+      !(radius <= (kStaticMargin + 1.0) * kernel_.supportRadius())) {
     c.fluid = nullptr;
     return;
   }
   if (c.fluid == &fluid && c.build == fluid.neighborGeneration() && c.offset.size() == n + 1)
     return;
-  // A sample within the support of a particle now is within support + skin / 2 of where
-  // it was (it has moved less than skin / 2); a hair more for rounding.
-  const double radius = (kernel_.supportRadius() + 0.5 * skin) * (1.0 + 1e-9);
   const double radius_sq = radius * radius;
   const int reach =
       std::max(1, static_cast<int>(std::ceil(radius / static_.grid.cellSize() - 1e-12)));
@@ -51,7 +54,7 @@ void Boundaries::prepareWallCandidates(const Fluid& fluid) {
   const std::int64_t sn = static_cast<std::int64_t>(n);
   auto each = [&](std::size_t i, auto&& f) {
     const Vec3 xi = x[i];
-    if (!c.near[static_.grid.cellIndex(xi)]) return;
+    if (!static_.reach_box.contains(xi) || !c.near[static_.grid.cellIndex(xi)]) return;
     static_.grid.forEachRangeInSphere(xi, reach, radius, false,
                                       [&](std::uint32_t lo, std::uint32_t hi) {
                                         for (std::uint32_t k = lo; k < hi; ++k)
@@ -149,7 +152,6 @@ void Boundaries::wallPass(const Fluid& fluid, const BodyPlacement& at, std::vect
   const std::vector<Vec3>& x = st.position;
   const double rho0 = fluid_.rest_density;
   const double mass = fluid.particleMass();
-  const bool has_static = !static_.position.empty();
   const std::size_t n = x.size(), nb = bodies_.size();
   const bool with_shear = shear && any_shear_;
   // Without shear (every wall free-slip, or density only) `shear` is left empty.
@@ -196,8 +198,7 @@ void Boundaries::wallPass(const Fluid& fluid, const BodyPlacement& at, std::vect
       double sum = 0.0;
       Vec3 a = Vec3::Zero();
       const auto [candidates, count] = staticCandidates(fluid, i);
-      if (candidates ? count > 0
-                     : has_static && (static_.near[static_.grid.cellIndex(xi)] & kNearDensity)) {
+      if (candidates ? count > 0 : nearStatic(xi, kNearDensity)) {
         Vec3 s = Vec3::Zero();
         open(0);
         sum += wallSums(static_, xi, nu, vi, zero, s, nullptr, record, candidates, count);

@@ -201,12 +201,19 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
   const double rf = s.fluid.particle_radius;
   FluidState& st = fluid_->state();
   std::uint32_t next_id = 0;
+  // Room for every lattice point at once (appending one by one left up to half of each
+  // array's memory unused), trimmed to what is kept below.
+  auto lattice = [&](const FluidBlock& b, int k) {
+    return std::max(1, static_cast<int>(std::lround((b.max[k] - b.min[k]) / sp)));
+  };
+  std::size_t room = 0;
+  for (const FluidBlock& b : s.blocks)
+    room += std::size_t(lattice(b, 0)) * std::size_t(lattice(b, 1)) * std::size_t(lattice(b, 2));
+  st.reserve(st.size() + room);
   for (const FluidBlock& b : s.blocks) {
     const double nu =
         b.kinematic_viscosity >= 0 ? b.kinematic_viscosity : s.fluid.kinematic_viscosity;
-    Eigen::Vector3i count;
-    for (int k = 0; k < 3; ++k)
-      count[k] = std::max(1, static_cast<int>(std::lround((b.max[k] - b.min[k]) / sp)));
+    const Eigen::Vector3i count(lattice(b, 0), lattice(b, 1), lattice(b, 2));
     for (int k = 0; k < count[2]; ++k)
       for (int j = 0; j < count[1]; ++j)
         for (int i = 0; i < count[0]; ++i) {
@@ -220,6 +227,7 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
           st.append(x, b.velocity, next_id++, nu);
         }
   }
+  st.shrinkToFit();
   nu_max_ = fluid_->maxKinematicViscosity();
   if (dfsph_ && st.size() > 0) {
     // The walls' density share made to agree with the fluid as it starts (on a sorted copy:
@@ -606,16 +614,24 @@ void Simulation::startDensities(FluidSnapshot& out) const {
 }
 
 std::uint64_t stateHash(const Simulation& sim) {
-  FluidSnapshot snap;
-  sim.snapshot(snap);
+  // The bytes of the positions, then of the velocities, in particle-number order (the
+  // snapshot's), read in place: no copy of the state.
+  const FluidState& st = sim.fluid().state();
+  std::vector<std::uint32_t> order(st.size());
+  for (std::size_t i = 0; i < order.size(); ++i)
+    order[i] = static_cast<std::uint32_t>(i);
+  std::sort(order.begin(), order.end(),
+            [&](std::uint32_t a, std::uint32_t b) { return st.id[a] < st.id[b]; });
   std::uint64_t h = 1469598103934665603ull;
-  auto mix = [&](const void* data, std::size_t bytes) {
-    const unsigned char* p = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < bytes; ++i)
+  auto mix = [&](const Vec3& v) {
+    const unsigned char* p = reinterpret_cast<const unsigned char*>(v.data());
+    for (std::size_t i = 0; i < sizeof(Vec3); ++i)
       h = (h ^ p[i]) * 1099511628211ull;
   };
-  mix(snap.position.data(), snap.position.size() * sizeof(Vec3));
-  mix(snap.velocity.data(), snap.velocity.size() * sizeof(Vec3));
+  for (const std::uint32_t i : order)
+    mix(st.position[i]);
+  for (const std::uint32_t i : order)
+    mix(st.velocity[i]);
   return h;
 }
 

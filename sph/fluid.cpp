@@ -76,13 +76,35 @@ void FluidState::append(const Vec3& x, const Vec3& v, std::uint32_t particle_id,
   kinematic_viscosity.push_back(nu);
 }
 
+void FluidState::reserve(std::size_t n) {
+  position.reserve(n);
+  velocity.reserve(n);
+  acceleration.reserve(n);
+  density.reserve(n);
+  pressure.reserve(n);
+  id.reserve(n);
+  kinematic_viscosity.reserve(n);
+}
+
+void FluidState::shrinkToFit() {
+  position.shrink_to_fit();
+  velocity.shrink_to_fit();
+  acceleration.shrink_to_fit();
+  density.shrink_to_fit();
+  pressure.shrink_to_fit();
+  id.shrink_to_fit();
+  kinematic_viscosity.shrink_to_fit();
+}
+
 Fluid::Fluid(const FluidParams& params, const Aabb& domain, FluidState* state)
     : params_(params),
       kernel_(params.smoothingLength()),
       domain_(domain),
       mass_(params.particleMass()),
-      grid_(domain, params.supportRadius()),
       state_(state ? *state : own_) {
+  // The grid is fitted to the particles when the lists are built; a domain-sized grid
+  // (the fallback) must be possible. Not built here: its memory would stay with the grid.
+  UniformGrid::check(domain, params.supportRadius());
   if (!(params.speed_of_sound > 0.0) || !std::isfinite(params.speed_of_sound))
     throw std::invalid_argument("fluid.speed_of_sound must be finite and > 0");
 }

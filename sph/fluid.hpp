@@ -81,6 +81,10 @@ struct FluidState {
   /// Removes the particles whose `remove` flag is set, keeping the others' order.
   void removeIf(const std::vector<std::uint8_t>& remove);
   void append(const Vec3& x, const Vec3& v, std::uint32_t particle_id, double nu);
+  /// Room for n particles in every array (append does not reallocate below it).
+  void reserve(std::size_t n);
+  /// Every array's memory cut to its size.
+  void shrinkToFit();
 };
 
 /// The fluid solver: its parameters (the model), the neighbour grid and scratch space, and

@@ -18,6 +18,11 @@ double UniformGrid::cellsFor(const Aabb& box, double cell_size) {
 }
 
 UniformGrid::UniformGrid(const Aabb& domain, double cell_size, std::size_t max_cells, int reach) {
+  check(domain, cell_size, max_cells, reach);
+  reset(domain, cell_size, reach);
+}
+
+void UniformGrid::check(const Aabb& domain, double cell_size, std::size_t max_cells, int reach) {
   if (!(cell_size > 0.0)) throw std::invalid_argument("grid cell size must be > 0");
   if (reach < 1) throw std::invalid_argument("grid reach must be >= 1");
   if (domain.empty()) throw std::invalid_argument("grid domain is empty");
@@ -27,7 +32,6 @@ UniformGrid::UniformGrid(const Aabb& domain, double cell_size, std::size_t max_c
                                 std::to_string(static_cast<long long>(cells)) +
                                 " grid cells (limit " + std::to_string(max_cells) +
                                 "); shrink the domain or increase the particle radius");
-  reset(domain, cell_size, reach);
 }
 
 void UniformGrid::reset(const Aabb& box, double cell_size, int reach) {

@@ -35,6 +35,9 @@ class UniformGrid {
   /// Throws std::invalid_argument when the grid would need more than `max_cells` cells.
   UniformGrid(const Aabb& domain, double cell_size, std::size_t max_cells = kMaxCells,
               int reach = 1);
+  /// The constructor's checks without building the grid (nothing allocated).
+  static void check(const Aabb& domain, double cell_size, std::size_t max_cells = kMaxCells,
+                    int reach = 1);
 
   static constexpr std::size_t kMaxCells = std::size_t(1) << 27;
 

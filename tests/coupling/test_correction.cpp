@@ -6,6 +6,8 @@
 #include "coupling/position_correction.hpp"
 #include "test_support.hpp"
 
+#include <cmath>
+#include <limits>
 #include <random>
 
 namespace wake::test {
@@ -211,6 +213,62 @@ TEST(CountInside, EqualsTheExactShapesEverywhere) {
   }
   EXPECT_GT(deep, 200u);  // the flags were read: points far inside a body
   EXPECT_GT(counted, deep);
+}
+
+/// The static samples' grid covers their bounds grown by a few supports, not the domain:
+/// far from every static sample (outside that box) a point has no static contact and no
+/// flags to read. In a domain much larger than its bodies (a small block, and a tilted
+/// ground plane whose inside reaches far below its samples), at random points everywhere
+/// the penetration count is the exact shapes', and the clearance min(r_f, distance) is the
+/// exact distance's (near a surface and outside every body).
+TEST(CountInside, AndContactsBeyondTheStaticSamplesGrid) {
+  const Vec3 kGroundNormal = Vec3(0.05, 1.0, 0.03).normalized();  // y = -0.52 .. -0.68
+  const Aabb domain{Vec3(-1, -1, -1), Vec3(1, 1, 1)};
+  Boundaries b(fluidParams(), domain);
+  b.addBody(staticBody("block", makeBox(Vec3(0.05, 0.04, 0.06)), 0, 0,
+                       Pose{Vec3(0.6, -0.45, 0.6), Quat(Eigen::AngleAxisd(0.4, Vec3::UnitY()))}));
+  b.addBody(staticBody("ground", makePlane(kGroundNormal, -0.6)));
+  b.finalize();
+  const double support = 4.0 * kR;
+  const double domain_cells = 8.0 / std::pow(0.5 * support, 3);
+  EXPECT_LT(double(b.staticGridCells()), 0.5 * domain_cells);
+  const BodyPlacement at = b.placeAtStart();
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), near(-3.0 * kR, 3.0 * kR);
+  std::size_t inside = 0, deep = 0, contacts = 0, open = 0;
+  for (int k = 0; k < 40000; ++k) {
+    Vec3 p(u(rng), u(rng), u(rng));
+    if (k % 2) {  // half of them close to a surface
+      const int body = (k / 2) % 2;
+      const double sd = b.body(body).shape->signedDistance(at[body].pose.toBody(p));
+      if (body == 1)
+        p -= (sd - near(rng)) * kGroundNormal;
+      else
+        p = at[0].pose.toWorld(Vec3(0.05 + near(rng), 0.8 * 0.04 * u(rng), 0.8 * 0.06 * u(rng)));
+      if (!domain.contains(p)) continue;  // fluid outside the domain is removed
+    }
+    double sd = std::numeric_limits<double>::infinity();
+    bool exact = false;
+    for (std::size_t i = 0; i < b.bodyCount(); ++i) {
+      const Vec3 q = at[i].pose.toBody(p);
+      exact = exact || b.body(i).shape->contains(q);
+      sd = std::min(sd, b.body(i).shape->signedDistance(q));
+    }
+    inside += exact;
+    deep += exact && p.y() < -0.8;  // beyond the samples' grid
+    contacts += sd < kR;
+    open += sd > 10.0 * support;
+    ASSERT_EQ(b.countInside({p}, at), exact ? 1u : 0u) << p.transpose() << ", distance " << sd;
+    // Near a surface: the exact distance (or r_f); elsewhere outside every body r_f (deep
+    // inside a static body the clearance does not look).
+    if (std::abs(sd) < 4.0 * kR || sd > 0.0) {
+      ASSERT_EQ(b.clearance(p, at).all, std::min(kR, sd)) << p.transpose();
+    }
+  }
+  EXPECT_GT(inside, 5000u);    // inside the ground
+  EXPECT_GT(deep, 1000u);      // ... far below its samples
+  EXPECT_GT(contacts, 5000u);  // within r_f of a surface
+  EXPECT_GT(open, 5000u);      // far from both
 }
 
 }  // namespace
