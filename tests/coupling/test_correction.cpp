@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <utility>
 
 namespace wake::test {
 namespace {
@@ -170,6 +171,18 @@ TEST(Correction, ParticlesAwayFromBodiesDoNotMove) {
     EXPECT_EQ(x[i], start[i]);
 }
 
+/// Whether p lies inside some body's exact shape, and its least signed distance to them.
+std::pair<bool, double> exactShapes(const Boundaries& b, const BodyPlacement& at, const Vec3& p) {
+  double sd = std::numeric_limits<double>::infinity();
+  bool inside = false;
+  for (std::size_t i = 0; i < b.bodyCount(); ++i) {
+    const Vec3 q = at[i].pose.toBody(p);
+    inside = inside || b.body(i).shape->contains(q);
+    sd = std::min(sd, b.body(i).shape->signedDistance(q));
+  }
+  return {inside, sd};
+}
+
 /// countInside reads the cells beyond contact reach of every sample from flags (inside a
 /// body or outside all) and asks the exact shapes only near a surface: at random points
 /// everywhere (deep inside thick static bodies and a moving one, in the tank's walls, near
@@ -200,13 +213,7 @@ TEST(CountInside, EqualsTheExactShapesEverywhere) {
   std::size_t deep = 0, counted = 0;
   for (int k = 0; k < 20000; ++k) {
     const Vec3 p = domain.min + Vec3(u(rng), u(rng), u(rng)).cwiseProduct(domain.max - domain.min);
-    double sd = std::numeric_limits<double>::infinity();
-    bool exact = false;
-    for (std::size_t i = 0; i < b.bodyCount(); ++i) {
-      const Vec3 q = at[i].pose.toBody(p);
-      exact = exact || b.body(i).shape->contains(q);
-      sd = std::min(sd, b.body(i).shape->signedDistance(q));
-    }
+    const auto [exact, sd] = exactShapes(b, at, p);
     deep += sd < -4.0 * kR;
     counted += exact;
     ASSERT_EQ(b.countInside({p}, at), exact ? 1u : 0u) << p.transpose() << ", distance " << sd;
@@ -247,13 +254,7 @@ TEST(CountInside, AndContactsBeyondTheStaticSamplesGrid) {
         p = at[0].pose.toWorld(Vec3(0.05 + near(rng), 0.8 * 0.04 * u(rng), 0.8 * 0.06 * u(rng)));
       if (!domain.contains(p)) continue;  // fluid outside the domain is removed
     }
-    double sd = std::numeric_limits<double>::infinity();
-    bool exact = false;
-    for (std::size_t i = 0; i < b.bodyCount(); ++i) {
-      const Vec3 q = at[i].pose.toBody(p);
-      exact = exact || b.body(i).shape->contains(q);
-      sd = std::min(sd, b.body(i).shape->signedDistance(q));
-    }
+    const auto [exact, sd] = exactShapes(b, at, p);
     inside += exact;
     deep += exact && p.y() < -0.8;  // beyond the samples' grid
     contacts += sd < kR;
