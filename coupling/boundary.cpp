@@ -443,8 +443,7 @@ std::size_t Boundaries::countInside(const std::vector<Vec3>& x, const BodyPlacem
       // Outside the grid's box (no static sample within kStaticMargin supports): the
       // exact shapes, which their bounds reject but for a body the samples do not enclose
       // (a shape clipped to the domain).
-      const std::uint8_t flags =
-          static_.reach_box.contains(xi) ? static_.near[static_.grid.cellIndex(xi)] : kNearContact;
+      const std::uint8_t flags = staticFlags(xi, kNearContact);
       if (flags & kNearContact) {
         for (std::uint32_t b : static_bodies_)
           if ((in = in_body(b, xi))) break;

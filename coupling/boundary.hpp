@@ -307,11 +307,15 @@ class Boundaries {
   /// The static set's grid covers its samples' bounds grown by this many kernel supports
   /// (and buildSet's one more), within the domain grown as much.
   static constexpr double kStaticMargin = 2.0;
+  /// The flags of x's cell in the static set's grid, or `outside` beyond its box (with
+  /// static samples only).
+  std::uint8_t staticFlags(const Vec3& x, std::uint8_t outside) const {
+    return static_.reach_box.contains(x) ? static_.near[static_.grid.cellIndex(x)] : outside;
+  }
   /// Whether static samples may lie within the reach `bit` flags of x (false without
   /// static samples, or outside their grid's box).
   bool nearStatic(const Vec3& x, std::uint8_t bit) const {
-    return !static_.position.empty() && static_.reach_box.contains(x) &&
-           (static_.near[static_.grid.cellIndex(x)] & bit);
+    return !static_.position.empty() && (staticFlags(x, 0) & bit);
   }
   /// Sets `bit` in near[cell] (near: one byte per cell of set.grid) for every cell within
   /// `reach` cells of a sample's cell: from anywhere else no sample is within reach x the

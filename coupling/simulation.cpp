@@ -108,6 +108,16 @@ void validate(const SimulationSettings& s) {
           "health.max_density_ratio", "must be > 1");
 }
 
+/// The particles' slots in order of their permanent numbers (a snapshot's order).
+std::vector<std::uint32_t> idOrder(const FluidState& st) {
+  std::vector<std::uint32_t> order(st.size());
+  for (std::size_t i = 0; i < order.size(); ++i)
+    order[i] = static_cast<std::uint32_t>(i);
+  std::sort(order.begin(), order.end(),
+            [&](std::uint32_t a, std::uint32_t b) { return st.id[a] < st.id[b]; });
+  return order;
+}
+
 }  // namespace
 
 double autoSpeedOfSound(const SimulationSettings& s) {
@@ -566,11 +576,7 @@ void Simulation::restoreState(const SimulationState& s) {
 void Simulation::snapshot(FluidSnapshot& out) const {
   const FluidState& st = fluid_->state();
   const std::size_t n = st.size();
-  std::vector<std::uint32_t> order(n);
-  for (std::size_t i = 0; i < n; ++i)
-    order[i] = static_cast<std::uint32_t>(i);
-  std::sort(order.begin(), order.end(),
-            [&](std::uint32_t a, std::uint32_t b) { return st.id[a] < st.id[b]; });
+  const std::vector<std::uint32_t> order = idOrder(st);
   out.id.resize(n);
   out.position.resize(n);
   out.velocity.resize(n);
@@ -617,11 +623,7 @@ std::uint64_t stateHash(const Simulation& sim) {
   // The bytes of the positions, then of the velocities, in particle-number order (the
   // snapshot's), read in place: no copy of the state.
   const FluidState& st = sim.fluid().state();
-  std::vector<std::uint32_t> order(st.size());
-  for (std::size_t i = 0; i < order.size(); ++i)
-    order[i] = static_cast<std::uint32_t>(i);
-  std::sort(order.begin(), order.end(),
-            [&](std::uint32_t a, std::uint32_t b) { return st.id[a] < st.id[b]; });
+  const std::vector<std::uint32_t> order = idOrder(st);
   std::uint64_t h = 1469598103934665603ull;
   auto mix = [&](const Vec3& v) {
     const unsigned char* p = reinterpret_cast<const unsigned char*>(v.data());

@@ -31,13 +31,7 @@ void compact(std::vector<T>& v, const std::vector<std::uint8_t>& remove) {
 }  // namespace
 
 void FluidState::resize(std::size_t n) {
-  position.resize(n);
-  velocity.resize(n);
-  acceleration.resize(n);
-  density.resize(n);
-  pressure.resize(n);
-  id.resize(n);
-  kinematic_viscosity.resize(n);
+  forEachArray([&](auto& v) { v.resize(n); });
 }
 
 void FluidState::permute(const std::vector<std::uint32_t>& order, FluidState& scratch) {
@@ -57,13 +51,7 @@ void FluidState::permute(const std::vector<std::uint32_t>& order, FluidState& sc
 }
 
 void FluidState::removeIf(const std::vector<std::uint8_t>& remove) {
-  compact(position, remove);
-  compact(velocity, remove);
-  compact(acceleration, remove);
-  compact(density, remove);
-  compact(pressure, remove);
-  compact(id, remove);
-  compact(kinematic_viscosity, remove);
+  forEachArray([&](auto& v) { compact(v, remove); });
 }
 
 void FluidState::append(const Vec3& x, const Vec3& v, std::uint32_t particle_id, double nu) {
@@ -77,23 +65,11 @@ void FluidState::append(const Vec3& x, const Vec3& v, std::uint32_t particle_id,
 }
 
 void FluidState::reserve(std::size_t n) {
-  position.reserve(n);
-  velocity.reserve(n);
-  acceleration.reserve(n);
-  density.reserve(n);
-  pressure.reserve(n);
-  id.reserve(n);
-  kinematic_viscosity.reserve(n);
+  forEachArray([&](auto& v) { v.reserve(n); });
 }
 
 void FluidState::shrinkToFit() {
-  position.shrink_to_fit();
-  velocity.shrink_to_fit();
-  acceleration.shrink_to_fit();
-  density.shrink_to_fit();
-  pressure.shrink_to_fit();
-  id.shrink_to_fit();
-  kinematic_viscosity.shrink_to_fit();
+  forEachArray([](auto& v) { v.shrink_to_fit(); });
 }
 
 Fluid::Fluid(const FluidParams& params, const Aabb& domain, FluidState* state)

@@ -85,6 +85,20 @@ struct FluidState {
   void reserve(std::size_t n);
   /// Every array's memory cut to its size.
   void shrinkToFit();
+
+ private:
+  /// Calls f(array) for each per-particle array (resize, removeIf, reserve, shrinkToFit: a
+  /// new field is added here, and to append and permute).
+  template <class F>
+  void forEachArray(F&& f) {
+    f(position);
+    f(velocity);
+    f(acceleration);
+    f(density);
+    f(pressure);
+    f(id);
+    f(kinematic_viscosity);
+  }
 };
 
 /// The fluid solver: its parameters (the model), the neighbour grid and scratch space, and
