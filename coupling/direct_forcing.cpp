@@ -81,7 +81,7 @@ void DirectForcing::normalPasses(Chunk& ch, const Record* rec, std::size_t count
 ControlResult DirectForcing::control(const Boundaries& boundaries, const ControlBodies& bodies,
                                      const ControlFluid& fluid, CouplingMethod method, double dt,
                                      std::vector<Wrench>& wrench) {
-  const std::size_t n = fluid.x_pred.size(), nb = boundaries.bodyCount();
+  const std::size_t n = fluid.v.size(), nb = boundaries.bodyCount();
   fluid.in_contact.assign(n, 0);
   wrench.assign(nb, Wrench{});
   if (nb == 0 || n == 0) return {};
@@ -110,7 +110,7 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, const Control
 
 ControlResult DirectForcing::findContacts(const Boundaries& boundaries, const ControlBodies& bodies,
                                           const ControlFluid& fluid, std::size_t chunk_count) {
-  const std::size_t n = fluid.x_pred.size(), nb = boundaries.bodyCount();
+  const std::size_t n = fluid.v.size(), nb = boundaries.bodyCount();
   if (chunks_.size() < chunk_count) chunks_.resize(chunk_count);
   std::size_t particles = 0, contacts_total = 0;
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : particles, contacts_total)

@@ -95,8 +95,8 @@ struct ControlBodies {
 
 /// The fluid as the velocity control sees it in one step (n particles each).
 struct ControlFluid {
-  const std::vector<Vec3>& x_pred;        ///< predicted positions x*
-  const std::vector<Vec3>& v_old;         ///< velocities at the step's start
+  const Vec3* x_pred;                     ///< predicted positions x*
+  const Vec3* v_old;                      ///< velocities at the step's start
   std::vector<Vec3>& v;                   ///< v* in, controlled out
   std::vector<std::uint8_t>& in_contact;  ///< out: 1 where the particle had a contact
 };

@@ -455,14 +455,14 @@ void Simulation::predict(double dt) {
   // v* = v + dt a, x* = x + dt v* (all forces but direct forcing's); the bodies over dt
   // without fluid forces.
   auto t0 = Clock::now();
-  fluid_->predict(dt, work_.x_pred, work_.v_old);
+  fluid_->predict(dt);
   timings_.integration += secondsSince(t0);
   if (dfsph_) {
     // The pressure that brings v* to the rest density at the step's end, its push on the
     // two-way bodies, and x* from the new v*.
     t0 = Clock::now();
     data_.run.solver_iterations += dfsph_->solveDensity(*fluid_, model_.gravity, dt);
-    fluid_->predictPositions(dt, work_.x_pred);
+    fluid_->predictPositions(dt);
     timings_.forces += secondsSince(t0);
     t0 = Clock::now();
     boundaries_->addSolverReaction(*fluid_, work_.placed, work_.wall_pairs, dfsph_->wallImpulse(),
@@ -488,7 +488,8 @@ ControlResult Simulation::controlVelocities(double dt) {
   FluidState& st = fluid_->state();
   const ControlResult control = forcing_.control(
       *boundaries_, {work_.placed, work_.body_now, work_.body_pred},
-      {work_.x_pred, work_.v_old, st.velocity, work_.flags}, model_.method, dt, data_.wrenches);
+      {fluid_->predictedPositions(), fluid_->stepStartVelocities(), st.velocity, work_.flags},
+      model_.method, dt, data_.wrenches);
   data_.run.last_contacts = control.contacts;
   const double t_control = secondsSince(t0);
   timings_.control += t_control;

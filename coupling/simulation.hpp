@@ -319,8 +319,6 @@ class Simulation {
   StepTimings timings_;
   /// Scratch space of the step, reused every step (no state: nothing in it outlives one).
   struct Workspace {
-    std::vector<Vec3> x_pred;                      // (n) predicted positions x*
-    std::vector<Vec3> v_old;                       // (n) velocities at the step's start
     std::vector<std::uint8_t> flags;               // (n) in contact / to remove
     std::vector<RigidState> body_now, body_final;  // (bodies) states at t and t + dt
     std::vector<RigidPrediction> body_pred;        // (bodies) predicted states

@@ -133,7 +133,7 @@ bool Fluid::buildCandidates() {
   grid_.sort(reference_, order_);
   for (std::size_t k = 0; k < order_.size(); ++k)
     if (order_[k] != k) return false;
-  buildPairLists(grid_, reference_, radius, candidates_);
+  buildPairLists(grid_, reference_, radius, neighbors_);
   return true;
 }
 
@@ -173,7 +173,7 @@ void Fluid::updateNeighbors(double dt) {
     if (!candidates_ready_ && reference_.size() == state_.size())
       candidates_ready_ = buildCandidates();
     if (candidates_ready_ && !movedFromReference()) {
-      filterPairLists(candidates_, state_.position, support, neighbors_);
+      keepPairsWithin(neighbors_, state_.position, support);
       return;
     }
   }
@@ -194,9 +194,9 @@ void Fluid::updateNeighbors(double dt) {
   ++skinned_builds_;
   reference_ = state_.position;
   reference_id_ = state_.id;
-  buildPairLists(grid_, state_.position, support + skin_, candidates_);
+  buildPairLists(grid_, state_.position, support + skin_, neighbors_);
   candidates_ready_ = true;
-  filterPairLists(candidates_, state_.position, support, neighbors_);
+  keepPairsWithin(neighbors_, state_.position, support);
 }
 
 namespace {
@@ -465,8 +465,8 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
 #if defined(WAKE_HAS_LANES4)
   if (wide_lanes_) range = uniform ? accelerationRange4<true> : accelerationRange4<false>;
 #endif
-  pair_sums_.resize(6 * state_.size());
-  in.sums = pair_sums_.data();
+  scratch_vec_.resize(2 * state_.size());
+  in.sums = scratch_vec_.empty() ? nullptr : scratch_vec_[0].data();  // 6 n doubles
   forEachRange(neighbors_,
                [&](std::int64_t i0, std::int64_t i1, std::size_t r) { range(i0, i1, r, in); });
 }
@@ -498,11 +498,12 @@ double Fluid::maxAcceleration() const {
   return std::sqrt(m);
 }
 
-void Fluid::predict(double dt, std::vector<Vec3>& x_pred, std::vector<Vec3>& v_old) {
+void Fluid::predict(double dt) {
   FluidState& st = state_;
   const std::int64_t n = static_cast<std::int64_t>(st.size());
-  x_pred.resize(st.size());
-  v_old.resize(st.size());
+  scratch_vec_.resize(2 * st.size());
+  Vec3* v_old = scratch_vec_.data();
+  Vec3* x_pred = v_old + n;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
     v_old[i] = st.velocity[i];
@@ -511,10 +512,11 @@ void Fluid::predict(double dt, std::vector<Vec3>& x_pred, std::vector<Vec3>& v_o
   }
 }
 
-void Fluid::predictPositions(double dt, std::vector<Vec3>& x_pred) const {
+void Fluid::predictPositions(double dt) {
   const FluidState& st = state_;
   const std::int64_t n = static_cast<std::int64_t>(st.size());
-  x_pred.resize(st.size());
+  scratch_vec_.resize(2 * st.size());
+  Vec3* x_pred = scratch_vec_.data() + n;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i)
     x_pred[i] = st.position[i] + dt * st.velocity[i];

@@ -128,7 +128,7 @@ class Fluid {
   /// skin (setNeighborSkin): sorts and builds the candidate pairs within support + skin
   /// only when some particle has moved skin / 2 or more since the last build or the
   /// particles changed (their number or a slot's id), and otherwise keeps the particles'
-  /// order and takes the pairs from the candidates (filterPairLists): the same pairs in
+  /// order and takes the pairs from the candidates (keepPairsWithin): the same pairs in
   /// the same order as a build in that order would give. Particles outside the domain must
   /// have been removed before.
   /// `dt` (s, finite, >= 0): the step the particles move by between calls (the last one
@@ -182,11 +182,17 @@ class Fluid {
   /// 4 % at r = H / 2.
   void computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& extra = {});
 
-  /// The step's prediction with every force but the boundaries' control:
-  /// v* = v + dt a (in the state), x* = x + dt v* (into x_pred); v_old keeps v.
-  void predict(double dt, std::vector<Vec3>& x_pred, std::vector<Vec3>& v_old);
-  /// x* = x + dt v (into x_pred) with the velocities as they are now.
-  void predictPositions(double dt, std::vector<Vec3>& x_pred) const;
+  /// The step's prediction with every force but the boundaries' control: v* = v + dt a
+  /// (in the state), x* = x + dt v* (predictedPositions), the velocities before kept
+  /// (stepStartVelocities).
+  void predict(double dt);
+  /// x* = x + dt v (predictedPositions) with the velocities as they are now.
+  void predictPositions(double dt);
+  /// (n) The velocities before the last predict(), and the positions it (or
+  /// predictPositions) predicted: valid until the next computeAccelerations, whose scratch
+  /// holds them.
+  const Vec3* stepStartVelocities() const { return scratch_vec_.data(); }
+  const Vec3* predictedPositions() const { return scratch_vec_.data() + state_.size(); }
   /// x += dt v: the step's integration with the final velocities.
   void integratePositions(double dt);
 
@@ -211,10 +217,10 @@ class Fluid {
   FluidState own_;     ///< the state when the caller gave none
   FluidState& state_;  ///< the state stepped: the caller's or own_
   FluidState scratch_;
+  /// With a skin, also the candidates: the pairs within support + skin at the last build
+  /// (of reference_), those within the support first (keepPairsWithin).
   PairLists neighbors_;
-  /// With a skin: the pairs within support + skin at the last build (of reference_).
-  PairLists candidates_;
-  bool candidates_ready_ = false;            ///< candidates_ are those of reference_
+  bool candidates_ready_ = false;            ///< neighbors_ holds the candidates of reference_
   double skin_ = 0;                          ///< m
   std::uint64_t builds_ = 0;                 ///< sorts and builds so far
   std::uint64_t skinned_builds_ = 0;         ///< of those, with candidates in the skin
@@ -224,13 +230,15 @@ class Fluid {
   std::vector<std::uint32_t> order_;         ///< (n) scratch: cell-sort permutation
   std::vector<double> p_over_rho_sq_;        ///< (n) P / rho^2 (m^5 / (kg s^2)), this step
   std::vector<double> inv_rho_;              ///< (n) 1 / rho (m^3/kg), this step
-  std::vector<double> pair_sums_;            ///< (6 n) scratch of the force loop's sums
+  /// (2 n) scratch: the force loop's partial sums (six per particle), then, from predict()
+  /// on, the step's start velocities and the predicted positions.
+  std::vector<Vec3> scratch_vec_;
   bool wide_lanes_ = hasWideLanes();
 
   /// Fits the grid to the bounds of `x` for pairs within `radius`.
   void fitGrid(const std::vector<Vec3>& x, double radius);
-  /// Builds candidates_ from reference_ (sorted positions); false when reference_ is not
-  /// in the grid's order.
+  /// Builds the candidates (into neighbors_) from reference_ (sorted positions); false
+  /// when reference_ is not in the grid's order.
   bool buildCandidates();
   /// Whether some particle moved skin / 2 or more from reference_, or the particles
   /// are not those of reference_.

@@ -93,16 +93,45 @@ void forEachEarlier(const PairLists& pairs, std::size_t first, std::size_t lo, s
   }
 }
 
+/// Whether p_j is closer than sqrt(radius_sq) to (xi, yi, zi): every pair test of the lists.
+inline bool isWithin(const Vec3& pj, double xi, double yi, double zi, double radius_sq) {
+  const double dx = xi - pj[0];
+  const double dy = yi - pj[1];
+  const double dz = zi - pj[2];
+  return dx * dx + dy * dy + dz * dz < radius_sq;
+}
+
 /// Writes j at dst[used] and returns used + 1 when p_j is closer than sqrt(radius_sq) to
 /// (xi, yi, zi), else used: a list's branch-free append (every candidate written, the
 /// cursor moved only for neighbours).
 inline std::size_t appendIfWithin(const Vec3& pj, std::uint32_t j, double xi, double yi, double zi,
                                   double radius_sq, std::uint32_t* dst, std::size_t used) {
-  const double dx = xi - pj[0];
-  const double dy = yi - pj[1];
-  const double dz = zi - pj[2];
   dst[used] = j;
-  return used + static_cast<std::size_t>(dx * dx + dy * dy + dz * dz < radius_sq);
+  return used + static_cast<std::size_t>(isWithin(pj, xi, yi, zi, radius_sq));
+}
+
+/// Appends to dst[w..) the entries of the ascending runs a[0, na) and b[0, nb) whose flag
+/// (fa, fb) is `want`, merged in ascending order; returns the new w.
+inline std::size_t mergeWhere(const std::uint32_t* a, const std::uint8_t* fa, std::size_t na,
+                              const std::uint32_t* b, const std::uint8_t* fb, std::size_t nb,
+                              std::uint8_t want, std::uint32_t* dst, std::size_t w) {
+  std::size_t p = 0, q = 0;
+  while (p < na && fa[p] != want)
+    ++p;
+  while (q < nb && fb[q] != want)
+    ++q;
+  while (p < na || q < nb) {
+    if (q >= nb || (p < na && a[p] < b[q])) {
+      dst[w++] = a[p++];
+      while (p < na && fa[p] != want)
+        ++p;
+    } else {
+      dst[w++] = b[q++];
+      while (q < nb && fb[q] != want)
+        ++q;
+    }
+  }
+  return w;
 }
 
 /// The before lists of `out` from its later lists and span (buildPairLists' second part).
@@ -175,6 +204,7 @@ void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, do
   out.range.resize(ranges + 1);
   for (std::size_t r = 0; r <= ranges; ++r)
     out.range[r] = n * r / ranges;
+  out.candidates.clear();
   // The later neighbours of each point (every pair tested once). Branch-free append: write
   // every candidate, advance the cursor only for neighbours.
   fillPairLists(
@@ -196,27 +226,56 @@ void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, do
       });
 }
 
+void keepPairsWithin(PairLists& lists, const std::vector<Vec3>& points, double radius) {
+  const std::size_t n = points.size();
+  if (lists.size() != n || lists.ranges() == 0)
+    throw std::logic_error("keepPairsWithin: the lists are for another number of points");
+  if (lists.candidates.size() != n) lists.candidates = lists.count;  // all listed: candidates
+  const double radius_sq = radius * radius;
+  const std::size_t ranges = lists.ranges();
+  std::vector<std::size_t> spans(ranges, 0);
+  // Each point's list is [pairs at the last call | the other candidates], both ascending.
+  // Most points keep the same pairs from one call to the next (a test of each candidate,
+  // nothing written); the others' two runs are merged again: the pairs now, then the rest.
+#pragma omp parallel for schedule(static, 1) num_threads(static_cast <int>(ranges))
+  for (std::int64_t sr = 0; sr < static_cast<std::int64_t>(ranges); ++sr) {
+    const std::size_t r = static_cast<std::size_t>(sr);
+    std::vector<std::uint8_t> within;
+    std::vector<std::uint32_t> copy;
+    std::size_t span = 0;
+    for (std::size_t i = lists.range[r]; i < lists.range[r + 1]; ++i) {
+      const std::uint32_t kept = lists.count[i], all = lists.candidates[i];
+      std::uint32_t* list = lists.later[r].data() + lists.begin[i];
+      if (within.size() < all) within.resize(all);
+      const double xi = points[i][0], yi = points[i][1], zi = points[i][2];
+      bool changed = false;
+      for (std::uint32_t k = 0; k < all; ++k) {
+        within[k] = isWithin(points[list[k]], xi, yi, zi, radius_sq);
+        changed |= bool(within[k]) != (k < kept);
+      }
+      if (changed) {
+        copy.assign(list, list + all);
+        const std::uint32_t* a = copy.data();
+        const std::uint8_t* fa = within.data();
+        const std::size_t now =
+            mergeWhere(a, fa, kept, a + kept, fa + kept, all - kept, 1, list, 0);
+        mergeWhere(a, fa, kept, a + kept, fa + kept, all - kept, 0, list, now);
+        lists.count[i] = static_cast<std::uint32_t>(now);
+      }
+      if (lists.count[i] > 0) span = std::max<std::size_t>(span, list[lists.count[i] - 1] - i);
+    }
+    spans[r] = span;
+  }
+  lists.span = *std::max_element(spans.begin(), spans.end());
+  buildBeforeLists(lists);
+}
+
 void filterPairLists(const PairLists& candidates, const std::vector<Vec3>& points, double radius,
                      PairLists& out) {
-  const std::size_t n = points.size();
-  if (candidates.size() != n || candidates.ranges() == 0)
+  if (candidates.size() != points.size() || candidates.ranges() == 0)
     throw std::logic_error("filterPairLists: the candidates are for another number of points");
-  const double radius_sq = radius * radius;
-  out.range = candidates.range;
-  // Each candidate list kept in its order, without the pairs now `radius` or farther apart
-  // (the same test as buildPairLists'); the kept ones fit in the candidates' room.
-  fillPairLists(
-      n, out,
-      [&](std::size_t r, std::size_t i, std::vector<std::uint32_t>& local, std::size_t used) {
-        const std::vector<std::uint32_t>& from = candidates.later[r];
-        if (i == candidates.range[r] && local.size() < from.size()) local.resize(from.size());
-        const double xi = points[i][0], yi = points[i][1], zi = points[i][2];
-        const std::uint32_t* list = from.data() + candidates.begin[i];
-        std::uint32_t* dst = local.data();
-        for (std::uint32_t k = 0, m = candidates.count[i]; k < m; ++k)
-          used = appendIfWithin(points[list[k]], list[k], xi, yi, zi, radius_sq, dst, used);
-        return used;
-      });
+  out = candidates;
+  keepPairsWithin(out, points, radius);
 }
 
 void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,

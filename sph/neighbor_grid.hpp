@@ -187,6 +187,9 @@ struct PairLists {
   std::vector<std::uint32_t> count;                               ///< (n)
   std::vector<std::vector<std::uint32_t>> before_offset, before;  ///< (ranges)
   std::size_t span = 0;                                           ///< largest j - i of a pair
+  /// (n) or empty: lists filtered in place (keepPairsWithin) hold point i's candidates,
+  /// candidates[i] of them from begin[i], its count[i] pairs first; empty: no others.
+  std::vector<std::uint32_t> candidates;
 
   std::size_t size() const { return count.size(); }
   std::size_t ranges() const { return range.empty() ? 0 : range.size() - 1; }
@@ -200,11 +203,17 @@ struct PairLists {
 void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
                     PairLists& out);
 
-/// The pairs of `candidates` (pair lists of the same points, e.g. built with a larger
-/// radius when they were elsewhere) that are now closer than `radius`, in the candidates'
-/// order and ranges: what buildPairLists would give for these points in this order, when
-/// every such pair is a candidate. Throws std::logic_error when the candidates are for
-/// another number of points.
+/// Keeps of the pairs `lists` holds (pair lists of the same points, e.g. built with a larger
+/// radius when they were elsewhere: every pair listed, or the candidates of a call before)
+/// those now closer than `radius`: what buildPairLists would give for these points in this
+/// order (each list ascending), when every such pair is listed. In place, in the lists'
+/// own memory: each point's list becomes its pairs now (count[i]) followed by its other
+/// candidates (both ascending), so the next call filters all of them again
+/// (PairLists::candidates). Throws std::logic_error when the lists are for another number
+/// of points.
+void keepPairsWithin(PairLists& lists, const std::vector<Vec3>& points, double radius);
+
+/// As keepPairsWithin, into `out`, leaving `candidates` as they are.
 void filterPairLists(const PairLists& candidates, const std::vector<Vec3>& points, double radius,
                      PairLists& out);
 

@@ -301,4 +301,65 @@ TEST(Neighbors, FilteredCandidatesAreThePairsOfPointsMovedLessThanHalfTheSkin) {
   omp_set_num_threads(threads_before);
   PairLists none, out;
   EXPECT_THROW(filterPairLists(none, moved, r, out), std::logic_error);
+  EXPECT_THROW(keepPairsWithin(none, moved, r), std::logic_error);
+}
+
+TEST(Neighbors, PairsKeptInPlaceStepAfterStepAreThePairsOfEachStep) {
+  // The candidates within r + skin, filtered in their own memory step after step while the
+  // points wander (each stays within skin / 2 of where the candidates were listed, and
+  // pairs come and go many times): after every step, each point's list holds exactly its
+  // pairs now, ascending (brute force), then its other candidates, ascending; the pairs
+  // listed and the candidates' set never change otherwise; on 1, 2 and 3 threads.
+  const double r = 0.15, skin = 0.04;
+  std::vector<Vec3> x = randomPoints(1200, -1, 1, 41);
+  for (int k = 0; k < 216; ++k)  // a lattice of spacing r / 2: pairs at exactly r
+    x[k] = Vec3(0.075 * (k % 6), 0.075 * ((k / 6) % 6), 0.075 * (k / 36));
+  UniformGrid grid(kCube, 0.5 * (r + skin), UniformGrid::kMaxCells, 2);
+  std::vector<std::uint32_t> order;
+  const std::vector<Vec3> sorted = sortedByCell(grid, x, order);
+  const int threads_before = omp_get_max_threads();
+  for (int threads : {1, 2, 3}) {
+    omp_set_num_threads(threads);
+    PairLists lists, built;
+    buildPairLists(grid, sorted, r + skin, lists);
+    buildPairLists(grid, sorted, r + skin, built);  // the candidates, untouched
+    std::mt19937 rng(42 + threads);
+    std::normal_distribution<double> g(0.0, 1.0);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::size_t changes = 0;
+    std::vector<std::uint32_t> last_count;
+    for (int step = 0; step < 12; ++step) {
+      std::vector<Vec3> now = sorted;
+      for (std::size_t i = 0; i < now.size(); ++i) {
+        if ((i + step) % 4 == 0) continue;  // some at the lattice: pairs at exactly r
+        const Vec3 direction = Vec3(g(rng), g(rng), g(rng)).normalized();
+        now[i] += 0.4999 * skin * std::cbrt(u(rng)) * direction;
+      }
+      keepPairsWithin(lists, now, r);
+      const std::string what = std::to_string(threads) + " threads, step " + std::to_string(step);
+      expectPairLists(lists, bruteForce(now, r), what);
+      PairLists fresh;  // the same from the untouched candidates
+      filterPairLists(built, now, r, fresh);
+      EXPECT_EQ(fresh.count, lists.count) << what;
+      EXPECT_EQ(fresh.span, lists.span) << what;
+      ASSERT_EQ(lists.candidates, built.count) << what;
+      for (std::size_t i = 0; i < sorted.size(); ++i) {
+        const std::size_t rg = lists.rangeOf(i);
+        const std::uint32_t* list = lists.later[rg].data() + lists.begin[i];
+        const std::uint32_t kept = lists.count[i], all = lists.candidates[i];
+        ASSERT_TRUE(std::is_sorted(list + kept, list + all)) << "point " << i << ", " << what;
+        std::vector<std::uint32_t> set(list, list + all);
+        std::sort(set.begin(), set.end());
+        const std::uint32_t* cand = built.later[rg].data() + built.begin[i];
+        ASSERT_EQ(set, std::vector<std::uint32_t>(cand, cand + all))
+            << "point " << i << ", " << what;
+      }
+      if (!last_count.empty())
+        for (std::size_t i = 0; i < sorted.size(); ++i)
+          changes += lists.count[i] != last_count[i];
+      last_count = lists.count;
+    }
+    EXPECT_GT(changes, 1000u) << "too few pairs came and went to test the merges";
+  }
+  omp_set_num_threads(threads_before);
 }
