@@ -124,7 +124,12 @@ void Boundaries::buildSet(SampleSet& set, const Aabb& box, const std::vector<Vec
   set.reach_box = grid_box;
 
   std::vector<std::uint32_t> order;
-  set.grid.sort(pos, order);
+  // A grid of many more cells than samples (the static set's, over the tank's inside)
+  // keeps the starts only where its rows hold samples: the same order and ranges.
+  if (double(set.grid.cellCount()) > kSparseCellsPerSample * double(pos.size()))
+    set.grid.sortSparse(pos, order);
+  else
+    set.grid.sort(pos, order);
   const std::size_t total = pos.size();
   set.position.resize(total);
   set.normal.resize(total);

@@ -302,11 +302,16 @@ class Boundaries {
   };
   /// Bit 1: a sample within the kernel support may exist; bit 2: within contact reach;
   /// bit 4: the cell lies inside the body (the static set: inside some static body),
-  /// beyond contact reach of its surface.
-  static constexpr std::uint8_t kNearDensity = 1, kNearContact = 2, kInterior = 4;
+  /// beyond contact reach of its surface; bit 8 (the static set): within the walls'
+  /// candidate radius (WallCandidates::reach cells).
+  static constexpr std::uint8_t kNearDensity = 1, kNearContact = 2, kInterior = 4,
+                                kNearCandidates = 8;
   /// The static set's grid covers its samples' bounds grown by this many kernel supports
   /// (and buildSet's one more), within the domain grown as much.
   static constexpr double kStaticMargin = 2.0;
+  /// A sample set's grid with more cells per sample than this keeps its cells' starts
+  /// sparse (UniformGrid::sortSparse).
+  static constexpr double kSparseCellsPerSample = 8.0;
   /// The flags of x's cell in the static set's grid, or `outside` beyond its box (with
   /// static samples only).
   std::uint8_t staticFlags(const Vec3& x, std::uint8_t outside) const {
@@ -430,9 +435,7 @@ class Boundaries {
     std::uint64_t build = 0;
     std::vector<std::uint64_t> offset;  ///< (n + 1)
     std::vector<std::uint32_t> index;
-    /// (static grid's cells) non-zero where a sample may lie within `reach` cells.
-    std::vector<std::uint8_t> near;
-    int reach = 0;
+    int reach = 0;  ///< cells of kNearCandidates in the static set's flags (0: none yet)
   };
   WallCandidates wall_candidates_;
   /// The static samples of particle i from wall_candidates_ ({nullptr, 0}: search them).

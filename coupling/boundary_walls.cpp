@@ -45,16 +45,17 @@ void Boundaries::prepareWallCandidates(const Fluid& fluid) {
   const int reach =
       std::max(1, static_cast<int>(std::ceil(radius / static_.grid.cellSize() - 1e-12)));
   // The cells from which a sample may be within the radius (most particles are far from
-  // every wall: one byte read instead of a search).
-  if (c.reach != reach || c.near.size() != static_.grid.cellCount()) {
-    c.near.assign(static_.grid.cellCount(), 0);
-    markNear(static_, reach, 1, c.near);
+  // every wall: one bit read instead of a search).
+  if (c.reach != reach) {
+    for (std::uint8_t& f : static_.near)
+      f &= static_cast<std::uint8_t>(~kNearCandidates);
+    markNear(static_, reach, kNearCandidates, static_.near);
     c.reach = reach;
   }
   const std::int64_t sn = static_cast<std::int64_t>(n);
   auto each = [&](std::size_t i, auto&& f) {
     const Vec3 xi = x[i];
-    if (!static_.reach_box.contains(xi) || !c.near[static_.grid.cellIndex(xi)]) return;
+    if (!nearStatic(xi, kNearCandidates)) return;
     static_.grid.forEachRangeInSphere(xi, reach, radius, false,
                                       [&](std::uint32_t lo, std::uint32_t hi) {
                                         for (std::uint32_t k = lo; k < hi; ++k)

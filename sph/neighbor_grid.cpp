@@ -41,14 +41,86 @@ void UniformGrid::reset(const Aabb& box, double cell_size, int reach) {
   reach_ = reach;
   for (int k = 0; k < 3; ++k)
     dims_[k] = static_cast<int>(std::max(1.0, std::ceil((box.max[k] - box.min[k]) * inv_cell_)));
-  cell_start_.assign(cellCount() + 1, 0);
+  // No points until a sort: every start 0 (sparse, nothing kept).
+  sparse_ = true;
+  cell_start_.clear();
+  row_start_.clear();
+  row_stretches_.clear();
+  stretches_.clear();
+}
+
+std::size_t UniformGrid::startBytes() const {
+  return cell_start_.capacity() * sizeof(std::uint32_t) +
+         (row_start_.capacity() + row_stretches_.capacity()) * sizeof(std::uint32_t) +
+         stretches_.capacity() * sizeof(RowStretch);
+}
+
+void UniformGrid::sortSparse(const std::vector<Vec3>& points, std::vector<std::uint32_t>& order) {
+  const std::size_t n = points.size();
+  cell_of_.resize(n);
+  order.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    cell_of_[i] = cellIndex(points[i]);
+    order[i] = static_cast<std::uint32_t>(i);
+  }
+  // The counting sort's order: by cell, stable.
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::uint32_t a, std::uint32_t b) { return cell_of_[a] < cell_of_[b]; });
+  sparse_ = true;
+  const std::uint32_t nx = static_cast<std::uint32_t>(dims_[0]);
+  const std::size_t rows = cellCount() / nx;
+  std::vector<std::uint32_t>().swap(cell_start_);
+  row_start_.assign(rows + 1, 0);
+  row_stretches_.assign(rows + 1, 0);
+  stretches_.clear();
+  // Walk the occupied cells in order: k is the first sorted point of cell c.
+  std::size_t k = 0;
+  while (k < n) {
+    const std::uint32_t c = cell_of_[order[k]];
+    const std::uint32_t row = c / nx;
+    const int x = static_cast<int>(c % nx);
+    std::size_t end = k;
+    while (end < n && cell_of_[order[end]] == c)
+      ++end;
+    RowStretch* g = stretches_.empty() ? nullptr : &stretches_.back();
+    const bool same_row = g && row_stretches_[row + 1] > 0 &&
+                          row_stretches_[row + 1] == static_cast<std::uint32_t>(stretches_.size());
+    if (same_row && x - g->x1 <= kStretchGap) {
+      // Grow the stretch to cell x: the cells between start where x does.
+      for (int e = g->x1 + 1; e < x; ++e)
+        cell_start_.push_back(static_cast<std::uint32_t>(k));
+      g->x1 = x;
+      cell_start_.push_back(static_cast<std::uint32_t>(end));
+    } else {
+      RowStretch s;
+      s.x0 = s.x1 = x;
+      s.starts = static_cast<std::uint32_t>(cell_start_.size());
+      cell_start_.push_back(static_cast<std::uint32_t>(k));
+      cell_start_.push_back(static_cast<std::uint32_t>(end));
+      stretches_.push_back(s);
+      row_stretches_[row + 1] = static_cast<std::uint32_t>(stretches_.size());
+    }
+    row_start_[row + 1] = static_cast<std::uint32_t>(end);
+    k = end;
+  }
+  // Rows without points: their stretches' end and their start carried over.
+  for (std::size_t r = 1; r <= rows; ++r) {
+    row_stretches_[r] = std::max(row_stretches_[r], row_stretches_[r - 1]);
+    row_start_[r] = std::max(row_start_[r], row_start_[r - 1]);
+  }
+  cell_start_.shrink_to_fit();
+  stretches_.shrink_to_fit();
 }
 
 void UniformGrid::sort(const std::vector<Vec3>& points, std::vector<std::uint32_t>& order) {
   const std::size_t n = points.size();
   cell_of_.resize(n);
   order.resize(n);
-  std::fill(cell_start_.begin(), cell_start_.end(), 0u);
+  sparse_ = false;
+  row_start_.clear();
+  row_stretches_.clear();
+  stretches_.clear();
+  cell_start_.assign(cellCount() + 1, 0u);
   const std::int64_t sn = static_cast<std::int64_t>(n);
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < sn; ++i)

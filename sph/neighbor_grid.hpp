@@ -76,10 +76,23 @@ class UniformGrid {
 
   /// Counting sort of `points` by cell. Afterwards `order[k]` is the input index of the
   /// k-th sorted point, and sorted points of cell c are [cellStart(c), cellStart(c + 1)).
-  /// Stable: points of one cell keep their input order.
+  /// Stable: points of one cell keep their input order. Keeps a start per cell (4 bytes
+  /// each).
   void sort(const std::vector<Vec3>& points, std::vector<std::uint32_t>& order);
+  /// As sort, the same order and ranges, for few points in many cells: the starts are kept
+  /// only along the stretches of each row that hold points (RowStretch); memory in
+  /// proportion to the points and the rows, not the cells.
+  void sortSparse(const std::vector<Vec3>& points, std::vector<std::uint32_t>& order);
+  /// Bytes the grid keeps for its cells' starts (the memory sort or sortSparse chose).
+  std::size_t startBytes() const;
 
-  std::uint32_t cellStart(std::uint32_t c) const { return cell_start_[c]; }
+  /// c in [0, cellCount()]: cellCount() gives the number of points.
+  std::uint32_t cellStart(std::uint32_t c) const {
+    // A row's first cell starts where the row before ends: (row - 1, nx), always in range.
+    const std::uint32_t nx = static_cast<std::uint32_t>(dims_[0]);
+    if (c == 0) return startOf(0, 0);
+    return startOf((c - 1) / nx, static_cast<int>((c - 1) % nx) + 1);
+  }
 
   /// Calls f(lo, hi) for the <= (2 reach + 1)^2 ranges [lo, hi) of sorted points in the
   /// cells within `reach` of p's cell (valid after sort(); indices into the sorted order).
@@ -156,18 +169,52 @@ class UniformGrid {
   /// f(lo, hi) with the sorted points of cells xa..xb of row (y, z), when it has any.
   template <class F>
   void visitRow(int y, int z, int xa, int xb, F& f) const {
-    const std::uint32_t row = static_cast<std::uint32_t>((z * dims_[1] + y) * dims_[0]);
-    const std::uint32_t lo = cell_start_[row + xa];
-    const std::uint32_t hi = cell_start_[row + xb + 1];
+    const std::uint32_t row = static_cast<std::uint32_t>(z * dims_[1] + y);
+    std::uint32_t lo, hi;
+    if (!sparse_) {
+      const std::uint32_t first = row * static_cast<std::uint32_t>(dims_[0]);
+      lo = cell_start_[first + xa];
+      hi = cell_start_[first + xb + 1];
+    } else {
+      lo = startOf(row, xa);
+      hi = startOf(row, xb + 1);
+    }
     if (lo < hi) f(lo, hi);
   }
+  /// The start of cell x (0 .. dims.x: x = dims.x is the row's end) of row `row`.
+  std::uint32_t startOf(std::uint32_t row, int x) const {
+    if (!sparse_) return cell_start_[row * static_cast<std::uint32_t>(dims_[0]) + x];
+    if (row_start_.empty()) return 0;  // not sorted yet: no points
+    for (std::uint32_t s = row_stretches_[row], e = row_stretches_[row + 1]; s < e; ++s) {
+      const RowStretch& g = stretches_[s];
+      if (x <= g.x0) return cell_start_[g.starts];
+      if (x <= g.x1 + 1) return cell_start_[g.starts + (x - g.x0)];
+    }
+    return row_start_[row + 1];
+  }
+
+  /// Cells x0..x1 of a row hold every point of a stretch of it; their starts (and the
+  /// start of cell x1 + 1) are cell_start_[starts ..]: a point-less cell before it starts
+  /// where cell x0 does, one after it (and before the next stretch) where x1 + 1 does.
+  struct RowStretch {
+    int x0 = 0, x1 = 0;
+    std::uint32_t starts = 0;
+  };
+  /// Cells this many or fewer apart along a row, both with points, share a stretch.
+  static constexpr int kStretchGap = 4;
 
   Vec3 origin_ = Vec3::Zero();
   double cell_size_ = 1.0, inv_cell_ = 1.0;
   int reach_ = 1;
   Eigen::Vector3i dims_ = Eigen::Vector3i::Ones();
-  std::vector<std::uint32_t> cell_start_;  // (cells + 1)
-  std::vector<std::uint32_t> cell_of_;     // (points) scratch
+  /// Dense (sort): (cells + 1) starts. Sparse (sortSparse, and before any sort): the
+  /// stretches' starts.
+  std::vector<std::uint32_t> cell_start_;
+  std::vector<std::uint32_t> cell_of_;  // (points) scratch
+  bool sparse_ = true;
+  std::vector<std::uint32_t> row_start_;      // sparse: (rows + 1) start of each row
+  std::vector<std::uint32_t> row_stretches_;  // sparse: (rows + 1) into stretches_
+  std::vector<RowStretch> stretches_;
 };
 
 /// Each pair of points within a radius once, in the list of its lower index: what the

@@ -159,6 +159,72 @@ TEST(Neighbors, OutsideDomainIsClampedNotLost) {
   expectMatchesBruteForce(x, kCube, 0.3);
 }
 
+TEST(Neighbors, SparseStartsAreTheDenseOnes) {
+  // Few points in many cells, as boundary samples: a plane's samples (a row full of
+  // points), two walls across every row (the tank's ends), points a cell or two apart
+  // and farther (stretches joined and not), some beyond the grid (clamped into its edge
+  // cells), clusters in one cell. sortSparse gives the dense sort's order, every cell's
+  // start, and the same ranges to the queries; and keeps less than a tenth of the bytes.
+  const Aabb box{Vec3(-1, -1, -1), Vec3(1, 1, 1)};
+  std::mt19937 rng(51);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<Vec3> x;
+  for (int k = 0; k < 900; ++k)
+    x.push_back(Vec3(u(rng), u(rng), -0.93));  // floor
+  for (int k = 0; k < 600; ++k)
+    x.push_back(Vec3(k % 2 ? -0.95 : 0.91, u(rng), u(rng)));  // ends
+  for (int k = 0; k < 300; ++k) {                             // along a row, gaps of 1 to 7 cells
+    const double cell = 0.04;
+    x.push_back(Vec3(-1 + cell * (0.5 + (k * 7) % 50), 0.1 + 0.001 * (k % 3), 0.2));
+  }
+  for (int k = 0; k < 200; ++k)
+    x.push_back(Vec3(u(rng), u(rng), u(rng)));
+  for (int k = 0; k < 50; ++k)
+    x.push_back(Vec3(3 * u(rng), 2.5, u(rng)));  // beyond the grid
+  for (int k = 0; k < 40; ++k)
+    x.push_back(Vec3(0.301, -0.299, 0.5));  // one cell
+  std::shuffle(x.begin(), x.end(), rng);
+  for (int reach : {1, 2}) {
+    UniformGrid dense(box, 0.04, UniformGrid::kMaxCells, reach), sparse = dense;
+    std::vector<std::uint32_t> order_dense, order_sparse;
+    dense.sort(x, order_dense);
+    sparse.sortSparse(x, order_sparse);
+    ASSERT_EQ(order_sparse, order_dense) << "reach " << reach;
+    const std::uint32_t cells = static_cast<std::uint32_t>(dense.cellCount());
+    std::size_t mismatches = 0;
+    for (std::uint32_t c = 0; c <= cells; ++c)
+      mismatches += sparse.cellStart(c) != dense.cellStart(c);
+    EXPECT_EQ(mismatches, 0u) << "reach " << reach;
+    EXPECT_LT(sparse.startBytes(), dense.startBytes() / 10) << "reach " << reach;
+    std::vector<Vec3> sorted(x.size());
+    for (std::size_t k = 0; k < x.size(); ++k)
+      sorted[k] = x[order_dense[k]];
+    using Ranges = std::vector<std::pair<std::uint32_t, std::uint32_t>>;
+    auto ranges = [&](const UniformGrid& g, const Vec3& p, int mode) {
+      Ranges out;
+      auto f = [&](std::uint32_t lo, std::uint32_t hi) { out.emplace_back(lo, hi); };
+      if (mode == 0) g.forEachRangeWithin(p, reach, f);
+      if (mode == 1) g.forEachRangeInSphere(p, reach, 0.07, false, f);
+      if (mode == 2) g.forEachNeighborRange(p, f);
+      return out;
+    };
+    std::size_t visited = 0;
+    for (int q = 0; q < 3000; ++q) {
+      const Vec3 p =
+          q < 1500 ? sorted[q % sorted.size()] : Vec3(1.2 * u(rng), 1.2 * u(rng), 1.2 * u(rng));
+      for (int mode = 0; mode < 3; ++mode) {
+        const Ranges want = ranges(dense, p, mode);
+        ASSERT_EQ(ranges(sparse, p, mode), want) << "query " << q << ", mode " << mode;
+        visited += want.size();
+      }
+    }
+    EXPECT_GT(visited, 10000u);
+  }
+  // Before any sort a grid has no points: every start 0.
+  const UniformGrid empty(box, 0.04);
+  EXPECT_EQ(empty.cellStart(17), 0u);
+}
+
 TEST(Neighbors, CellCoordinatesAreTheFloorClampedIntoTheGrid) {
   // floor((p - origin) / cell) clamped to [0, dims - 1] on each axis: points inside, on
   // cell faces, just below zero (-0.5 cell: floor -1, clamped to 0), beyond either side,
