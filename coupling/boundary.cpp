@@ -91,6 +91,36 @@ void Boundaries::place(const std::vector<RigidState>& states, BodyPlacement& out
     out.frames[bi] = frameAt(b, states[bi]);
     out.moving_reach.extend(out.frames[bi].world_reach);
   }
+  // The bins: up to kMaxCellsPerAxis cells along each axis of moving_reach.
+  BodyPlacement::MovingBins& bins = out.bins;
+  bins.words = (moving_.size() + 63) / 64;
+  bins.mask.clear();
+  if (out.moving_reach.empty()) return;
+  const Vec3 extent = out.moving_reach.max - out.moving_reach.min;
+  bins.origin = out.moving_reach.min;
+  for (int k = 0; k < 3; ++k) {
+    const double cell =
+        std::max(extent[k] / BodyPlacement::MovingBins::kMaxCellsPerAxis, kernel_.supportRadius());
+    bins.dims[k] = std::max(1, std::min(BodyPlacement::MovingBins::kMaxCellsPerAxis,
+                                        static_cast<int>(std::ceil(extent[k] / cell))));
+    bins.inv_cell[k] = 1.0 / cell;
+  }
+  bins.mask.assign(std::size_t(bins.dims.prod()) * bins.words, 0);
+  for (std::size_t m = 0; m < moving_.size(); ++m) {
+    const Aabb& reach = out.frames[moving_[m].body].world_reach;
+    if (reach.empty()) continue;
+    int lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = bins.coord(reach.min, k);
+      hi[k] = bins.coord(reach.max, k);
+    }
+    const std::uint64_t bit = std::uint64_t(1) << (m % 64);
+    for (int z = lo[2]; z <= hi[2]; ++z)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int x = lo[0]; x <= hi[0]; ++x)
+          bins.mask[((std::size_t(z) * bins.dims[1] + y) * bins.dims[0] + x) * bins.words +
+                    m / 64] |= bit;
+  }
 }
 
 BodyPlacement Boundaries::placeAtStart() const {
@@ -335,15 +365,16 @@ void Boundaries::forEachBodyDistance(const Vec3& x, const BodyPlacement& at, F&&
         f(bi, true, bodies_[bi].settings.shape->signedDistance(frame.pose.toBody(x)));
     }
   }
-  if (!at.moving_reach.contains(x)) return;
-  for (const MovingBody& m : moving_) {
+  at.forEachMovingNear(x, [&](std::size_t mi) {
+    const MovingBody& m = moving_[mi];
     const BodyFrame& frame = at[m.body];
-    if (!frame.world_reach.contains(x)) continue;
+    if (!frame.world_reach.contains(x)) return true;
     const Vec3 p = frame.rotation.transpose() * (x - frame.pose.position);
     if (m.samples.reach_box.contains(p) &&
         (m.samples.near[m.samples.grid.cellIndex(p)] & (kNearContact | kInterior)))
       f(m.body, false, bodies_[m.body].settings.shape->signedDistance(p));
-  }
+    return true;
+  });
 }
 
 std::size_t Boundaries::findContacts(const Vec3& x, const BodyPlacement& at,
@@ -456,20 +487,26 @@ std::size_t Boundaries::countInside(const std::vector<Vec3>& x, const BodyPlacem
         in = (flags & kInterior) != 0;
       }
     }
-    const bool near_moving = !all_sampled || at.moving_reach.contains(xi);
-    for (std::size_t m = 0; m < moving_.size() && !in && near_moving; ++m) {
+    // Moving body m: inside it, when x lies within its bounds. Beyond its samples' reach
+    // box (and so beyond its world_reach: what the bins tell) outside, the samples
+    // enclosing it; a body without samples asks its shape.
+    auto in_moving = [&](std::size_t m) {
       const MovingBody& body = moving_[m];
       const BodyFrame& frame = at[body.body];
-      if (!frame.world_bounds.contains(xi)) continue;
+      if (!frame.world_bounds.contains(xi)) return false;
       const SampleSet& set = body.samples;
       const Vec3 p = frame.pose.toBody(xi);
-      if (set.position.empty()) {
-        in = bodies_[body.body].settings.shape->contains(p);
-      } else if (set.reach_box.contains(p)) {  // beyond it: outside (the samples enclose it)
-        const std::uint8_t flags = set.near[set.grid.cellIndex(p)];
-        in = flags & kNearContact ? bodies_[body.body].settings.shape->contains(p)
+      if (set.position.empty()) return bodies_[body.body].settings.shape->contains(p);
+      if (!set.reach_box.contains(p)) return false;
+      const std::uint8_t flags = set.near[set.grid.cellIndex(p)];
+      return flags & kNearContact ? bodies_[body.body].settings.shape->contains(p)
                                   : (flags & kInterior) != 0;
-      }
+    };
+    if (!in && all_sampled) {
+      at.forEachMovingNear(xi, [&](std::size_t m) { return !(in = in_moving(m)); });
+    } else {
+      for (std::size_t m = 0; m < moving_.size() && !in; ++m)
+        in = in_moving(m);
     }
     if (in) ++inside;
   }

@@ -60,7 +60,42 @@ struct BodyFrame {
 struct BodyPlacement {
   std::vector<BodyFrame> frames;  ///< (bodies)
   Aabb moving_reach;              ///< union of the moving bodies' world_reach
+
   const BodyFrame& operator[](std::size_t b) const { return frames[b]; }
+
+  /// Calls f(m) for each moving body m (Boundaries' moving order) whose world_reach may
+  /// hold x, ascending, until f returns false: every m whose world_reach holds x, and
+  /// maybe others (the caller tests the box); none outside moving_reach. A particle tests
+  /// the few bodies near it, not each body's box.
+  template <class F>
+  void forEachMovingNear(const Vec3& x, F&& f) const {
+    if (!moving_reach.contains(x)) return;
+    const std::uint64_t* mask = bins.mask.data() + bins.cellOf(x) * bins.words;
+    for (std::size_t w = 0; w < bins.words; ++w)
+      for (std::uint64_t bits = mask[w]; bits != 0; bits &= bits - 1)
+        if (!f(w * 64 + static_cast<std::size_t>(__builtin_ctzll(bits)))) return;
+  }
+
+  /// A coarse grid over moving_reach: per cell, a bit per moving body whose world_reach
+  /// overlaps the cell (Boundaries::place fills it).
+  struct MovingBins {
+    static constexpr int kMaxCellsPerAxis = 16;
+    Vec3 origin = Vec3::Zero();
+    Vec3 inv_cell = Vec3::Zero();  ///< 1/m per axis
+    Eigen::Vector3i dims = Eigen::Vector3i::Ones();
+    std::size_t words = 0;            ///< 64-bit words per cell: ceil(moving bodies / 64)
+    std::vector<std::uint64_t> mask;  ///< (cells * words)
+    /// The cell of coordinate t along axis k, clamped (monotone in t: a box's cells hold
+    /// every point of the box).
+    int coord(const Vec3& x, int k) const {
+      const double t = (x[k] - origin[k]) * inv_cell[k];
+      const double last = static_cast<double>(dims[k] - 1);
+      return static_cast<int>(t > 0.0 ? (t < last ? t : last) : 0.0);
+    }
+    std::size_t cellOf(const Vec3& x) const {
+      return (std::size_t(coord(x, 2)) * dims[1] + coord(x, 1)) * dims[0] + coord(x, 0);
+    }
+  } bins;
 };
 
 /// The samples' pressure term P_k / rho_k^2 of one step (m^5 / (kg s^2)), per sample set
@@ -466,16 +501,17 @@ inline void Boundaries::forEachSampleNear(const Vec3& x, const BodyPlacement& at
         static_cast<const Vec3*>(nullptr));
     });
   }
-  if (!at.moving_reach.contains(x)) return;
-  for (const MovingBody& m : moving_) {
+  at.forEachMovingNear(x, [&](std::size_t mi) {
+    const MovingBody& m = moving_[mi];
     const BodyFrame& frame = at[m.body];
-    if (!frame.world_reach.contains(x)) continue;
+    if (!frame.world_reach.contains(x)) return true;
     const Vec3 p = frame.rotation.transpose() * (x - frame.pose.position);
-    if (!m.samples.reach_box.contains(p)) continue;
+    if (!m.samples.reach_box.contains(p)) return true;
     forEachContactCandidate(m.samples, p, [&](std::uint32_t k, double d_sq) {
       f(m.body, m.samples.position[k], p, d_sq, &frame.rotation, &frame.pose.position);
     });
-  }
+    return true;
+  });
 }
 
 }  // namespace wake

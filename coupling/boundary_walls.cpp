@@ -206,29 +206,29 @@ void Boundaries::wallPass(const Fluid& fluid, const BodyPlacement& at, std::vect
         close();
         a -= s;
       }
-      if (at.moving_reach.contains(xi)) {
-        for (const MovingBody& m : moving_) {
-          const BodyFrame& f = at[m.body];
-          if (!f.world_reach.contains(xi)) continue;
-          const std::uint32_t set = static_cast<std::uint32_t>(&m - moving_.data()) + 1;
-          const Mat3 rt = f.rotation.transpose();
-          const Vec3 p = rt * (xi - f.pose.position);
-          if (!m.samples.reach_box.contains(p)) continue;
-          const bool react = nu > 0.0 && bodies_[m.body].settings.twoWay();
-          Vec3 s = Vec3::Zero(), moment = Vec3::Zero();
-          open(set);
-          sum += wallSums(m.samples, p, nu, rt * (vi - f.linear_velocity), rt * f.angular_velocity,
-                          s, react ? &moment : nullptr, record);
-          close();
-          const Vec3 force = f.rotation * s;  // per unit fluid mass, on the body
-          a -= force;
-          if (react) {
-            Wrench& w = chunk_reaction_[c * nb + m.body];
-            w.force += mass * force;
-            w.torque += mass * (f.rotation * moment);
-          }
+      at.forEachMovingNear(xi, [&](std::size_t mi) {
+        const MovingBody& m = moving_[mi];
+        const BodyFrame& f = at[m.body];
+        if (!f.world_reach.contains(xi)) return true;
+        const std::uint32_t set = static_cast<std::uint32_t>(mi) + 1;
+        const Mat3 rt = f.rotation.transpose();
+        const Vec3 p = rt * (xi - f.pose.position);
+        if (!m.samples.reach_box.contains(p)) return true;
+        const bool react = nu > 0.0 && bodies_[m.body].settings.twoWay();
+        Vec3 s = Vec3::Zero(), moment = Vec3::Zero();
+        open(set);
+        sum += wallSums(m.samples, p, nu, rt * (vi - f.linear_velocity), rt * f.angular_velocity, s,
+                        react ? &moment : nullptr, record);
+        close();
+        const Vec3 force = f.rotation * s;  // per unit fluid mass, on the body
+        a -= force;
+        if (react) {
+          Wrench& w = chunk_reaction_[c * nb + m.body];
+          w.force += mass * force;
+          w.torque += mass * (f.rotation * moment);
         }
-      }
+        return true;
+      });
       density[i] += rho0 * sum;
       if (with_shear) (*shear)[i] = a;
       if (record) pairs->end[i] = static_cast<std::uint32_t>(record->size());

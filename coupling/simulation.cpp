@@ -262,23 +262,26 @@ std::size_t Simulation::countPenetrating() const {
 
 void Simulation::removeOutsideDomain() {
   FluidState& st = fluid_->state();
-  const std::size_t n = st.size();
-  work_.flags.assign(n, 0);
+  const std::int64_t n = static_cast<std::int64_t>(st.size());
+  const Aabb& domain = model_.domain;
+  // A NaN position is not "outside": it stops the run (the user's code may have set it).
+  auto outside = [&](std::int64_t i) {
+    return finite(st.position[i]) && !domain.contains(st.position[i]);
+  };
   std::size_t out = 0;
   bool non_finite = false;
-  for (std::size_t i = 0; i < n; ++i) {
-    // A NaN position is not "outside": it stops the run (the user's code may have set it).
-    if (!finite(st.position[i])) {
-      non_finite = true;
-      continue;
-    }
-    const bool outside = !model_.domain.contains(st.position[i]);
-    work_.flags[i] = outside;
-    out += outside;
+#pragma omp parallel for schedule(static) reduction(+ : out) reduction(|| : non_finite)
+  for (std::int64_t i = 0; i < n; ++i) {
+    non_finite = non_finite || !finite(st.position[i]);
+    out += outside(i);
   }
   if (non_finite)
     fail(checkFluidHealth(st, model_.fluid.rest_density, model_.health.max_density_ratio));
-  if (out == 0) return;
+  if (out == 0) return;  // the usual step: nothing written
+  work_.flags.resize(st.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i)
+    work_.flags[i] = outside(i);
   st.removeIf(work_.flags);
   data_.run.lost += out;
 }

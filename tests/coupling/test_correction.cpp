@@ -6,10 +6,13 @@
 #include "coupling/position_correction.hpp"
 #include "test_support.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
+#include <string>
 #include <utility>
+#include <vector>
 
 namespace wake::test {
 namespace {
@@ -220,6 +223,69 @@ TEST(CountInside, EqualsTheExactShapesEverywhere) {
   }
   EXPECT_GT(deep, 200u);  // the flags were read: points far inside a body
   EXPECT_GT(counted, deep);
+}
+
+/// Many moving bodies (more than 64: the bins' masks take two words), at random poses, some
+/// overlapping, some near the tank's walls: at random points, BodyPlacement's bins offer
+/// every moving body whose reach box holds the point, in ascending order, and none outside
+/// the union of those boxes; and the penetration count, which reads the bins, is the exact
+/// shapes'.
+TEST(CountInside, ManyMovingBodiesThroughTheBins) {
+  const Aabb domain{Vec3(-0.1, -0.1, -0.1), Vec3(0.7, 0.5, 0.4)};
+  Boundaries b(fluidParams(), domain);
+  b.addBody(staticBody("tank", makeTank(Vec3::Zero(), Vec3(0.6, 0.4, 0.3), 0.04)));
+  std::mt19937 rng(71);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<std::size_t> moving;  // body index of each moving body, in Boundaries' order
+  for (int k = 0; k < 70; ++k) {
+    BodySettings s =
+        staticBody("b" + std::to_string(k), k % 2 ? makeBox(Vec3(0.01 + 0.03 * u(rng), 0.015, 0.02))
+                                                  : makeSphere(0.012 + 0.02 * u(rng)));
+    s.kind = BodyKind::Dynamic;
+    s.pose.position = Vec3(0.6 * u(rng), 0.4 * u(rng), 0.3 * u(rng));
+    moving.push_back(b.addBody(s));
+  }
+  b.finalize();
+  std::vector<RigidState> states(b.bodyCount());
+  for (std::size_t i = 0; i < states.size(); ++i) {
+    states[i].pose = b.body(i).pose;
+    states[i].pose.orientation =
+        Quat(Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), 1.0).normalized()));
+  }
+  BodyPlacement at;
+  b.place(states, at);
+  std::size_t offered = 0, holding = 0, inside = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const Vec3 p = domain.min + Vec3(u(rng), u(rng), u(rng)).cwiseProduct(domain.max - domain.min);
+    std::vector<std::size_t> got;
+    at.forEachMovingNear(p, [&](std::size_t m) {
+      got.push_back(m);
+      return true;
+    });
+    ASSERT_TRUE(std::is_sorted(got.begin(), got.end()));
+    ASSERT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end());
+    if (!at.moving_reach.contains(p)) ASSERT_TRUE(got.empty()) << p.transpose();
+    for (std::size_t m = 0; m < moving.size(); ++m)
+      if (at[moving[m]].world_reach.contains(p)) {
+        ++holding;
+        ASSERT_TRUE(std::binary_search(got.begin(), got.end(), m))
+            << "body " << m << " at " << p.transpose();
+      }
+    offered += got.size();
+    const bool exact = exactShapes(b, at, p).first;
+    inside += exact;
+    ASSERT_EQ(b.countInside({p}, at), exact ? 1u : 0u) << p.transpose();
+  }
+  EXPECT_GT(holding, 5000u);
+  EXPECT_GT(inside, 500u);
+  EXPECT_LT(offered, 4 * holding) << "the bins offer far more bodies than hold the point";
+  // Stopping: f returning false ends the walk.
+  std::size_t calls = 0;
+  at.forEachMovingNear(at[moving[0]].pose.position, [&](std::size_t) {
+    ++calls;
+    return false;
+  });
+  EXPECT_EQ(calls, 1u);
 }
 
 /// The static samples' grid covers their bounds grown by a few supports, not the domain:
