@@ -400,8 +400,11 @@ void Simulation::computeFluidForces() {
   fluid_->computeFluidDensity();
   timings_.density += secondsSince(t0);
   t0 = Clock::now();
-  // The walls' density share and viscous shear (their part of the fluid's sums).
-  boundaries_->addWallTerms(*fluid_, work_.placed, st.density, work_.wall_shear,
+  // The walls' density share and viscous shear (their part of the fluid's sums). Their
+  // accelerations go into the state's acceleration array, free until the fluid's forces
+  // are computed (computeAccelerations reads each particle's before writing it).
+  std::vector<Vec3>& wall_accelerations = st.acceleration;
+  boundaries_->addWallTerms(*fluid_, work_.placed, st.density, wall_accelerations,
                             work_.wall_reaction, work_.wall_pairs);
   timings_.boundary += secondsSince(t0);
   const double compression = averageCompression(st.density, model_.fluid.rest_density);
@@ -429,12 +432,12 @@ void Simulation::computeFluidForces() {
     boundaries_->computeSamplePressure(*fluid_, work_.placed, model_.gravity, work_.wall_pairs,
                                        work_.sample_pressure);
     boundaries_->addWallPressure(*fluid_, work_.placed, work_.wall_pairs, work_.sample_pressure,
-                                 work_.wall_shear, work_.wall_reaction);
+                                 wall_accelerations, work_.wall_reaction);
     timings_.boundary += secondsSince(t0);
   }
 
   t0 = Clock::now();
-  fluid_->computeAccelerations(model_.gravity, work_.wall_shear);
+  fluid_->computeAccelerations(model_.gravity, wall_accelerations);
   timings_.forces += secondsSince(t0);
   if (penalty_) {
     // Baseline: boundary forces join the fluid's forces; no control, no correction.

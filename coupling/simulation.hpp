@@ -322,7 +322,6 @@ class Simulation {
     std::vector<std::uint8_t> flags;               // (n) in contact / to remove
     std::vector<RigidState> body_now, body_final;  // (bodies) states at t and t + dt
     std::vector<RigidPrediction> body_pred;        // (bodies) predicted states
-    std::vector<Vec3> wall_shear;                  // (n) the walls' viscous shear, m/s^2
     std::vector<Wrench> wall_reaction;             // (bodies) its reaction on two-way bodies
     SamplePressure sample_pressure;                // the boundary samples' pressure
     WallPairs wall_pairs;                          // the step's (particle, sample) pairs

@@ -459,8 +459,11 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
   in.visc = 2.0 * params_.viscosity * h * params_.speed_of_sound;
   in.m = mass_;
   in.gravity = gravity;
-  in.add = extra.empty() ? nullptr : extra.data();
+  in.add = extra.empty() ? nullptr : extra.data();  // before the resize: extra may be it
+  state_.acceleration.resize(state_.size());
   in.out = state_.acceleration.data();
+  if (in.add && extra.size() != state_.size())
+    throw std::invalid_argument("computeAccelerations: extra is not one per particle");
   auto range = uniform ? accelerationRange2<true> : accelerationRange2<false>;
 #if defined(WAKE_HAS_LANES4)
   if (wide_lanes_) range = uniform ? accelerationRange4<true> : accelerationRange4<false>;

@@ -171,7 +171,10 @@ class Fluid {
   /// in the accelerations. The state's pressure is left as it is.
   void computeWithoutPressure();
   /// Pressure + artificial viscosity + physical viscosity + gravity accelerations, plus
-  /// `extra` (n, m/s^2; e.g. the walls' viscous shear) when it is not empty.
+  /// `extra` (n, m/s^2; e.g. the walls' viscous shear) when it is not empty, into the
+  /// state's acceleration (sized n). `extra` may be the state's acceleration array itself
+  /// (each particle's entry is read before it is written): the walls' terms need no
+  /// array of their own.
   ///
   /// Physical viscosity is Morris et al. (1997)'s SPH Laplacian, symmetric in a and b:
   ///   dv_a/dt += sum_b m_b (nu_a / rho_b + nu_b / rho_a) (x_ab . grad W_ab) / |x_ab|^2 v_ab,

@@ -264,7 +264,9 @@ TEST(CountInside, ManyMovingBodiesThroughTheBins) {
     });
     ASSERT_TRUE(std::is_sorted(got.begin(), got.end()));
     ASSERT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end());
-    if (!at.moving_reach.contains(p)) ASSERT_TRUE(got.empty()) << p.transpose();
+    if (!at.moving_reach.contains(p)) {
+      ASSERT_TRUE(got.empty()) << p.transpose();
+    }
     for (std::size_t m = 0; m < moving.size(); ++m)
       if (at[moving[m]].world_reach.contains(p)) {
         ++holding;

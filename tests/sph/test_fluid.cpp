@@ -130,6 +130,52 @@ TEST(Momentum, FluidForcesConserveLinearMomentum) {
   EXPECT_LT(total.norm(), 1e-12 * scale);
 }
 
+TEST(Accelerations, ExtraTermsInTheAccelerationArrayItselfAreAddedAsFromTheirOwn) {
+  // The walls' terms written into the state's acceleration array (what Simulation does)
+  // give the bits they give from an array of their own, on 1 and 2 threads; and with no
+  // extra terms the array is sized by the call.
+  const int threads_before = omp_get_max_threads();
+  for (int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    Fluid fluid(testParams(), kDomain);
+    fillLattice(fluid, 9, 0.019);
+    std::mt19937 rng(13);
+    std::uniform_real_distribution<double> u(-1, 1);
+    std::vector<Vec3> extra(fluid.state().size());
+    for (std::size_t i = 0; i < fluid.state().size(); ++i) {
+      fluid.state().velocity[i] = Vec3(u(rng), u(rng), u(rng));
+      extra[i] = 50.0 * Vec3(u(rng), u(rng), u(rng));
+    }
+    fluid.updateNeighbors();
+    fluid.computeFluidDensity();
+    fluid.computePressure();
+    fluid.computeAccelerations(Vec3(0, -9.81, 0), extra);
+    const std::vector<Vec3> own = fluid.state().acceleration;
+    fluid.state().acceleration = extra;
+    fluid.computeAccelerations(Vec3(0, -9.81, 0), fluid.state().acceleration);
+    ASSERT_EQ(fluid.state().acceleration.size(), own.size());
+    for (std::size_t i = 0; i < own.size(); ++i)
+      ASSERT_EQ(fluid.state().acceleration[i], own[i]) << "particle " << i << ", " << threads;
+    fluid.computeAccelerations(Vec3(0, -9.81, 0));
+    const std::vector<Vec3> none = fluid.state().acceleration;
+    fluid.state().acceleration.clear();
+    fluid.computeAccelerations(Vec3(0, -9.81, 0), fluid.state().acceleration);
+    EXPECT_EQ(fluid.state().acceleration, none) << threads;
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < own.size(); ++i)
+      differ += own[i] != none[i];
+    EXPECT_EQ(differ, own.size());
+  }
+  omp_set_num_threads(threads_before);
+  Fluid fluid(testParams(), kDomain);
+  fillLattice(fluid, 4, 0.019);
+  fluid.updateNeighbors();
+  fluid.computeFluidDensity();
+  fluid.computePressure();
+  EXPECT_THROW(fluid.computeAccelerations(Vec3::Zero(), std::vector<Vec3>(3)),
+               std::invalid_argument);
+}
+
 TEST(Determinism, SameAccelerationsWithOneAndTwoThreads) {
   auto run = [](int threads) {
     omp_set_num_threads(threads);
