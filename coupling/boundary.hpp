@@ -85,12 +85,11 @@ struct BodyPlacement {
     Eigen::Vector3i dims = Eigen::Vector3i::Ones();
     std::size_t words = 0;            ///< 64-bit words per cell: ceil(moving bodies / 64)
     std::vector<std::uint64_t> mask;  ///< (cells * words)
-    /// The cell of coordinate t along axis k, clamped (monotone in t: a box's cells hold
-    /// every point of the box).
+    /// The cell of x along axis k, clamped into the bins (monotone in x[k]: a box's cells
+    /// hold every point of the box).
     int coord(const Vec3& x, int k) const {
       const double t = (x[k] - origin[k]) * inv_cell[k];
-      const double last = static_cast<double>(dims[k] - 1);
-      return static_cast<int>(t > 0.0 ? (t < last ? t : last) : 0.0);
+      return static_cast<int>(clampToCells(t, static_cast<double>(dims[k] - 1)));
     }
     std::size_t cellOf(const Vec3& x) const {
       return (std::size_t(coord(x, 2)) * dims[1] + coord(x, 1)) * dims[0] + coord(x, 0);

@@ -272,8 +272,9 @@ void Simulation::removeOutsideDomain() {
   bool non_finite = false;
 #pragma omp parallel for schedule(static) reduction(+ : out) reduction(|| : non_finite)
   for (std::int64_t i = 0; i < n; ++i) {
-    non_finite = non_finite || !finite(st.position[i]);
-    out += outside(i);
+    const bool ok = finite(st.position[i]);
+    non_finite = non_finite || !ok;
+    out += ok && !domain.contains(st.position[i]);
   }
   if (non_finite)
     fail(checkFluidHealth(st, model_.fluid.rest_density, model_.health.max_density_ratio));

@@ -75,6 +75,7 @@ void UniformGrid::sortSparse(const std::vector<Vec3>& points, std::vector<std::u
   stretches_.clear();
   // Walk the occupied cells in order: k is the first sorted point of cell c.
   std::size_t k = 0;
+  std::uint32_t last_row = 0;  // the row of stretches_.back()
   while (k < n) {
     const std::uint32_t c = cell_of_[order[k]];
     const std::uint32_t row = c / nx;
@@ -82,22 +83,18 @@ void UniformGrid::sortSparse(const std::vector<Vec3>& points, std::vector<std::u
     std::size_t end = k;
     while (end < n && cell_of_[order[end]] == c)
       ++end;
-    RowStretch* g = stretches_.empty() ? nullptr : &stretches_.back();
-    const bool same_row = g && row_stretches_[row + 1] > 0 &&
-                          row_stretches_[row + 1] == static_cast<std::uint32_t>(stretches_.size());
-    if (same_row && x - g->x1 <= kStretchGap) {
+    if (!stretches_.empty() && row == last_row && x - stretches_.back().x1 <= kStretchGap) {
       // Grow the stretch to cell x: the cells between start where x does.
-      for (int e = g->x1 + 1; e < x; ++e)
+      for (int e = stretches_.back().x1 + 1; e <= x; ++e)
         cell_start_.push_back(static_cast<std::uint32_t>(k));
-      g->x1 = x;
-      cell_start_.push_back(static_cast<std::uint32_t>(end));
+      stretches_.back().x1 = x;
     } else {
       RowStretch s;
       s.x0 = s.x1 = x;
       s.starts = static_cast<std::uint32_t>(cell_start_.size());
       cell_start_.push_back(static_cast<std::uint32_t>(k));
-      cell_start_.push_back(static_cast<std::uint32_t>(end));
       stretches_.push_back(s);
+      last_row = row;
       row_stretches_[row + 1] = static_cast<std::uint32_t>(stretches_.size());
     }
     row_start_[row + 1] = static_cast<std::uint32_t>(end);

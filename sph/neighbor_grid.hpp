@@ -188,14 +188,14 @@ class UniformGrid {
     for (std::uint32_t s = row_stretches_[row], e = row_stretches_[row + 1]; s < e; ++s) {
       const RowStretch& g = stretches_[s];
       if (x <= g.x0) return cell_start_[g.starts];
-      if (x <= g.x1 + 1) return cell_start_[g.starts + (x - g.x0)];
+      if (x <= g.x1) return cell_start_[g.starts + (x - g.x0)];
     }
-    return row_start_[row + 1];
+    return row_start_[row + 1];  // after the row's last stretch: where the row ends
   }
 
-  /// Cells x0..x1 of a row hold every point of a stretch of it; their starts (and the
-  /// start of cell x1 + 1) are cell_start_[starts ..]: a point-less cell before it starts
-  /// where cell x0 does, one after it (and before the next stretch) where x1 + 1 does.
+  /// Cells x0..x1 of a row hold every point of a stretch of it; their starts are
+  /// cell_start_[starts ..]. A point-less cell before the stretch starts where cell x0
+  /// does; one after it, where the next stretch (or the row's end) does.
   struct RowStretch {
     int x0 = 0, x1 = 0;
     std::uint32_t starts = 0;
