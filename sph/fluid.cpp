@@ -289,22 +289,19 @@ void Fluid::computeFluidDensity() {
 
 void Fluid::computePressure() {
   const std::int64_t n = static_cast<std::int64_t>(state_.size());
-  p_over_rho_sq_.resize(state_.size());
   inv_rho_.resize(state_.size());
+  pressure_term_ = true;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
-    const double p = params_.pressure(state_.density[i]);
-    state_.pressure[i] = p;
-    const double inv_rho = 1.0 / state_.density[i];
-    inv_rho_[i] = inv_rho;
-    p_over_rho_sq_[i] = p * inv_rho * inv_rho;
+    state_.pressure[i] = params_.pressure(state_.density[i]);
+    inv_rho_[i] = 1.0 / state_.density[i];
   }
 }
 
 void Fluid::computeWithoutPressure() {
   const std::int64_t n = static_cast<std::int64_t>(state_.size());
-  p_over_rho_sq_.assign(state_.size(), 0.0);
   inv_rho_.resize(state_.size());
+  pressure_term_ = false;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i)
     inv_rho_[i] = 1.0 / state_.density[i];
@@ -315,7 +312,8 @@ namespace {
 /// What the pair loop of Fluid::computeAccelerations reads and writes.
 struct AccelerationInputs {
   const Vec3 *x, *v;
-  const double *rho, *inv_rho, *nu, *pr2;
+  const double *rho, *inv_rho, *nu;
+  const double* p;  ///< (n) the pressure, or null: no pressure term
   const PairLists* neighbors;
   const CubicSplineKernel* kernel;
   double eps_sq, visc, m;
@@ -347,11 +345,13 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
   const CubicSplineKernel& kernel = *in.kernel;
   const Vec3 *x = in.x, *v = in.v;
   double* sums = in.sums;
+  const double* p = in.p;
   const std::uint32_t end = static_cast<std::uint32_t>(i1);
   // (acc.x, acc.y), (acc.z, lap.x), (lap.y, lap.z)
   auto add = [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e,
                  bool both) {
     double* own = sums + 6 * i;
+    const double pr2_i = p ? p[i] * in.inv_rho[i] * in.inv_rho[i] : 0.0;
     Lanes2 acc_xy{}, acc_z_lap_x{}, lap_yz{};
     if (both) {
       acc_xy = Lanes2::load(own);
@@ -375,7 +375,10 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
       const M du = M::all(v[i].x()) - uj, dv = M::all(v[i].y()) - vj, dw = M::all(v[i].z()) - wj;
       const M r_sq = dx * dx + dy * dy + dz * dz;
       const M dwr = kernel.derivativeOverR(sqrt(r_sq));
-      M coeff = M::all(in.pr2[i]) + gatherLanes(zero, in.pr2, j);
+      // P / rho^2 of each side, (P rho^-1) rho^-1 (one neighbour at a time: the same bits).
+      const M inv_rho_j = gatherLanes(zero, in.inv_rho, j);
+      M coeff = zero;
+      if (in.p) coeff = M::all(pr2_i) + gatherLanes(zero, in.p, j) * inv_rho_j * inv_rho_j;
       const M vx = du * dx + dv * dy + dw * dz;
       coeff = select(vx < zero,
                      coeff + M::all(-in.visc) / (M::all(in.rho[i]) + gatherLanes(zero, in.rho, j)) *
@@ -383,7 +386,6 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
                      coeff);
       const M f = M::all(in.m) * coeff * dwr;
       // Morris: x . grad W / |x|^2 = dW/dr / r (< 0), so v_a is drawn towards v_b.
-      const M inv_rho_j = gatherLanes(zero, in.inv_rho, j);
       const M mu = kUniformNu ? M::all(in.nu[0]) * (inv_rho_j + M::all(in.inv_rho[i]))
                               : M::all(in.nu[i]) * inv_rho_j +
                                     gatherLanes(zero, in.nu, j) * M::all(in.inv_rho[i]);
@@ -451,7 +453,7 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
   in.rho = state_.density.data();
   in.inv_rho = inv_rho_.data();
   in.nu = nu;
-  in.pr2 = p_over_rho_sq_.data();
+  in.p = pressure_term_ ? state_.pressure.data() : nullptr;
   in.neighbors = &neighbors_;
   in.kernel = &kernel_;
   in.eps_sq = 0.01 * h * h;

@@ -174,7 +174,8 @@ class Fluid {
   /// `extra` (n, m/s^2; e.g. the walls' viscous shear) when it is not empty, into the
   /// state's acceleration (sized n). `extra` may be the state's acceleration array itself
   /// (each particle's entry is read before it is written): the walls' terms need no
-  /// array of their own.
+  /// array of their own. The pressure term reads the state's pressure as it is
+  /// (computePressure's; none after computeWithoutPressure) and the 1 / rho of either.
   ///
   /// Physical viscosity is Morris et al. (1997)'s SPH Laplacian, symmetric in a and b:
   ///   dv_a/dt += sum_b m_b (nu_a / rho_b + nu_b / rho_a) (x_ab . grad W_ab) / |x_ab|^2 v_ab,
@@ -231,8 +232,8 @@ class Fluid {
   std::vector<Vec3> reference_;              ///< (n) m, positions at the last build (skin)
   std::vector<std::uint32_t> reference_id_;  ///< (n) ids at the last build (skin)
   std::vector<std::uint32_t> order_;         ///< (n) scratch: cell-sort permutation
-  std::vector<double> p_over_rho_sq_;        ///< (n) P / rho^2 (m^5 / (kg s^2)), this step
   std::vector<double> inv_rho_;              ///< (n) 1 / rho (m^3/kg), this step
+  bool pressure_term_ = true;                ///< computePressure (true) or computeWithoutPressure
   /// (2 n) scratch: the force loop's partial sums (six per particle), then, from predict()
   /// on, the step's start velocities and the predicted positions.
   std::vector<Vec3> scratch_vec_;
