@@ -12,13 +12,17 @@ namespace wake {
 
 namespace {
 template <class T>
-void gather(const std::vector<T>& src, const std::vector<std::uint32_t>& order,
-            std::vector<T>& dst) {
-  dst.resize(order.size());
-  const std::int64_t n = static_cast<std::int64_t>(order.size());
+void gather(const std::vector<T>& src, const std::uint32_t* order, T* dst) {
+  const std::int64_t n = static_cast<std::int64_t>(src.size());
 #pragma omp parallel for schedule(static)
   for (std::int64_t k = 0; k < n; ++k)
     dst[k] = src[order[k]];
+}
+
+template <class T>
+void gather(const std::vector<T>& src, const std::uint32_t* order, std::vector<T>& dst) {
+  dst.resize(src.size());
+  gather(src, order, dst.data());
 }
 
 template <class T>
@@ -34,7 +38,7 @@ void FluidState::resize(std::size_t n) {
   forEachArray([&](auto& v) { v.resize(n); });
 }
 
-void FluidState::permute(const std::vector<std::uint32_t>& order, FluidState& scratch) {
+void FluidState::permute(const std::uint32_t* order, std::uint32_t* id_scratch) {
   // Persistent fields move with their particle, each gathered into the array of a field
   // derived each step after the sort (acceleration, density), which takes the old one's
   // storage in exchange: no second copy of the state is kept.
@@ -46,8 +50,8 @@ void FluidState::permute(const std::vector<std::uint32_t>& order, FluidState& sc
   kinematic_viscosity.swap(density);
   gather(pressure, order, density);
   pressure.swap(density);
-  gather(id, order, scratch.id);
-  id.swap(scratch.id);
+  gather(id, order, id_scratch);
+  std::copy(id_scratch, id_scratch + id.size(), id.begin());
 }
 
 void FluidState::removeIf(const std::vector<std::uint8_t>& remove) {
@@ -130,9 +134,11 @@ void Fluid::restoreNeighborReference(std::vector<Vec3> position, std::vector<std
 bool Fluid::buildCandidates() {
   const double radius = kernel_.supportRadius() + skin_;
   fitGrid(reference_, radius);
-  grid_.sort(reference_, order_);
-  for (std::size_t k = 0; k < order_.size(); ++k)
-    if (order_[k] != k) return false;
+  const std::size_t n = reference_.size();
+  std::uint32_t* order = step_.view<std::uint32_t>(0, 2 * n);
+  grid_.sort(reference_.data(), n, order, order + n);
+  for (std::size_t k = 0; k < n; ++k)
+    if (order[k] != k) return false;
   buildPairLists(grid_, reference_, radius, neighbors_);
   return true;
 }
@@ -181,8 +187,11 @@ void Fluid::updateNeighbors(double dt) {
   ++generation_;
   const bool skinned = skinPays(dt);
   fitGrid(state_.position, support + (skinned ? skin_ : 0.0));
-  grid_.sort(state_.position, order_);
-  state_.permute(order_, scratch_);
+  // The order, the points' cells and the ids' gather space in the step's scratch.
+  const std::size_t n = state_.size();
+  std::uint32_t* order = step_.view<std::uint32_t>(0, 3 * n);
+  grid_.sort(state_.position.data(), n, order, order + n);
+  state_.permute(order, order + 2 * n);
   if (!skinned) {
     // No reference: the next call builds again.
     reference_.clear();
@@ -470,8 +479,7 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
 #if defined(WAKE_HAS_LANES4)
   if (wide_lanes_) range = uniform ? accelerationRange4<true> : accelerationRange4<false>;
 #endif
-  scratch_vec_.resize(2 * state_.size());
-  in.sums = scratch_vec_.empty() ? nullptr : scratch_vec_[0].data();  // 6 n doubles
+  in.sums = step_.view<double>(0, 6 * state_.size());
   forEachRange(neighbors_,
                [&](std::int64_t i0, std::int64_t i1, std::size_t r) { range(i0, i1, r, in); });
 }
@@ -506,8 +514,7 @@ double Fluid::maxAcceleration() const {
 void Fluid::predict(double dt) {
   FluidState& st = state_;
   const std::int64_t n = static_cast<std::int64_t>(st.size());
-  scratch_vec_.resize(2 * st.size());
-  Vec3* v_old = scratch_vec_.data();
+  Vec3* v_old = step_.view<Vec3>(0, 2 * st.size());
   Vec3* x_pred = v_old + n;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
@@ -520,8 +527,7 @@ void Fluid::predict(double dt) {
 void Fluid::predictPositions(double dt) {
   const FluidState& st = state_;
   const std::int64_t n = static_cast<std::int64_t>(st.size());
-  scratch_vec_.resize(2 * st.size());
-  Vec3* x_pred = scratch_vec_.data() + n;
+  Vec3* x_pred = step_.view<Vec3>(0, 2 * st.size()) + n;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i)
     x_pred[i] = st.position[i] + dt * st.velocity[i];

@@ -6,6 +6,7 @@
 
 #include "sph/kernel.hpp"
 #include "sph/neighbor_grid.hpp"
+#include "sph/step_scratch.hpp"
 #include "sph/types.hpp"
 
 #include <algorithm>
@@ -71,13 +72,13 @@ struct FluidState {
 
   std::size_t size() const { return position.size(); }
   void resize(std::size_t n);
-  /// Applies `order` (new slot k takes old slot order[k]) to the persistent per-particle
-  /// arrays (position, velocity, id, kinematic_viscosity, and pressure: the pressure
-  /// solver starts from the last step's). acceleration and density, derived each step
-  /// after the sort, serve as the gather space and are left undefined (sized n). `scratch`
-  /// lends its id array. The one place that permutes particles: a new persistent field
-  /// must be added here.
-  void permute(const std::vector<std::uint32_t>& order, FluidState& scratch);
+  /// Applies `order` (n; new slot k takes old slot order[k]) to the persistent
+  /// per-particle arrays (position, velocity, id, kinematic_viscosity, and pressure: the
+  /// pressure solver starts from the last step's). acceleration and density, derived each
+  /// step after the sort, serve as the gather space and are left undefined (sized n);
+  /// `id_scratch` (n) that of the ids. The one place that permutes particles: a new
+  /// persistent field must be added here.
+  void permute(const std::uint32_t* order, std::uint32_t* id_scratch);
   /// Removes the particles whose `remove` flag is set, keeping the others' order.
   void removeIf(const std::vector<std::uint8_t>& remove);
   void append(const Vec3& x, const Vec3& v, std::uint32_t particle_id, double nu);
@@ -195,8 +196,8 @@ class Fluid {
   /// (n) The velocities before the last predict(), and the positions it (or
   /// predictPositions) predicted: valid until the next computeAccelerations, whose scratch
   /// holds them.
-  const Vec3* stepStartVelocities() const { return scratch_vec_.data(); }
-  const Vec3* predictedPositions() const { return scratch_vec_.data() + state_.size(); }
+  const Vec3* stepStartVelocities() const { return step_.at<Vec3>(0); }
+  const Vec3* predictedPositions() const { return step_.at<Vec3>(0) + state_.size(); }
   /// x += dt v: the step's integration with the final velocities.
   void integratePositions(double dt);
 
@@ -220,7 +221,6 @@ class Fluid {
   Aabb bounds_;
   FluidState own_;     ///< the state when the caller gave none
   FluidState& state_;  ///< the state stepped: the caller's or own_
-  FluidState scratch_;
   /// With a skin, also the candidates: the pairs within support + skin at the last build
   /// (of reference_), those within the support first (keepPairsWithin).
   PairLists neighbors_;
@@ -231,12 +231,13 @@ class Fluid {
   std::uint64_t generation_ = 0;             ///< neighborGeneration()
   std::vector<Vec3> reference_;              ///< (n) m, positions at the last build (skin)
   std::vector<std::uint32_t> reference_id_;  ///< (n) ids at the last build (skin)
-  std::vector<std::uint32_t> order_;         ///< (n) scratch: cell-sort permutation
   std::vector<double> inv_rho_;              ///< (n) 1 / rho (m^3/kg), this step
   bool pressure_term_ = true;                ///< computePressure (true) or computeWithoutPressure
-  /// (2 n) scratch: the force loop's partial sums (six per particle), then, from predict()
-  /// on, the step's start velocities and the predicted positions.
-  std::vector<Vec3> scratch_vec_;
+  /// The step's scratch, in turn: the sort's order, cells and id gather (3 n uint32,
+  /// updateNeighbors); the force loop's partial sums (6 n doubles); from predict() on, the
+  /// step's start velocities and the predicted positions (2 n Vec3).
+  StepScratch step_;
+
   bool wide_lanes_ = hasWideLanes();
 
   /// Fits the grid to the bounds of `x` for pairs within `radius`.

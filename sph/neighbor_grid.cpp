@@ -107,12 +107,17 @@ void UniformGrid::sortSparse(const std::vector<Vec3>& points, std::vector<std::u
   }
   cell_start_.shrink_to_fit();
   stretches_.shrink_to_fit();
+  std::vector<std::uint32_t>().swap(cell_of_);
 }
 
 void UniformGrid::sort(const std::vector<Vec3>& points, std::vector<std::uint32_t>& order) {
-  const std::size_t n = points.size();
-  cell_of_.resize(n);
-  order.resize(n);
+  cell_of_.resize(points.size());
+  order.resize(points.size());
+  sort(points.data(), points.size(), order.data(), cell_of_.data());
+}
+
+void UniformGrid::sort(const Vec3* points, std::size_t n, std::uint32_t* order,
+                       std::uint32_t* cell_of) {
   sparse_ = false;
   row_start_.clear();
   row_stretches_.clear();
@@ -121,15 +126,15 @@ void UniformGrid::sort(const std::vector<Vec3>& points, std::vector<std::uint32_
   const std::int64_t sn = static_cast<std::int64_t>(n);
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < sn; ++i)
-    cell_of_[i] = cellIndex(points[i]);
+    cell_of[i] = cellIndex(points[i]);
   // Histogram shifted by one, prefix sum gives the start of each cell.
   for (std::size_t i = 0; i < n; ++i)
-    ++cell_start_[cell_of_[i] + 1];
+    ++cell_start_[cell_of[i] + 1];
   for (std::size_t c = 1; c < cell_start_.size(); ++c)
     cell_start_[c] += cell_start_[c - 1];
   // Scatter; cell_start_[c] is used as the running cursor of cell c, then restored.
   for (std::size_t i = 0; i < n; ++i)
-    order[cell_start_[cell_of_[i]]++] = static_cast<std::uint32_t>(i);
+    order[cell_start_[cell_of[i]]++] = static_cast<std::uint32_t>(i);
   for (std::size_t c = cell_start_.size() - 1; c > 0; --c)
     cell_start_[c] = cell_start_[c - 1];
   cell_start_[0] = 0;

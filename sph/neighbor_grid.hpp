@@ -79,6 +79,9 @@ class UniformGrid {
   /// Stable: points of one cell keep their input order. Keeps a start per cell (4 bytes
   /// each).
   void sort(const std::vector<Vec3>& points, std::vector<std::uint32_t>& order);
+  /// As sort, for the n points from `points` on, in the caller's memory: the order (n) and
+  /// the points' cells (n, scratch).
+  void sort(const Vec3* points, std::size_t n, std::uint32_t* order, std::uint32_t* cell_of);
   /// As sort, the same order and ranges, for few points in many cells: the starts are kept
   /// only along the stretches of each row that hold points (RowStretch); memory in
   /// proportion to the points and the rows, not the cells.
@@ -210,7 +213,7 @@ class UniformGrid {
   /// Dense (sort): (cells + 1) starts. Sparse (sortSparse, and before any sort): the
   /// stretches' starts.
   std::vector<std::uint32_t> cell_start_;
-  std::vector<std::uint32_t> cell_of_;  // (points) scratch
+  std::vector<std::uint32_t> cell_of_;  // (points) scratch of the vector sorts
   bool sparse_ = true;
   std::vector<std::uint32_t> row_start_;      // sparse: (rows + 1) start of each row
   std::vector<std::uint32_t> row_stretches_;  // sparse: (rows + 1) into stretches_

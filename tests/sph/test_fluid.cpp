@@ -176,6 +176,27 @@ TEST(Accelerations, ExtraTermsInTheAccelerationArrayItselfAreAddedAsFromTheirOwn
                std::invalid_argument);
 }
 
+TEST(StepScratch, AViewGrownKeepsWhatTheLastOneWrote) {
+  StepScratch scratch;
+  std::uint32_t* ids = scratch.view<std::uint32_t>(0, 10);
+  for (std::uint32_t k = 0; k < 10; ++k)
+    ids[k] = 7 * k + 1;
+  EXPECT_GE(scratch.bytes(), 10 * sizeof(std::uint32_t));
+  // A larger view (another phase's type, past the first) moves the block; the bytes held
+  // before stay.
+  double* sums = scratch.view<double>(64, 100000);
+  for (std::size_t k = 0; k < 100000; ++k)
+    sums[k] = 0.5 * double(k);
+  EXPECT_GE(scratch.bytes(), 64 + 100000 * sizeof(double));
+  const std::uint32_t* kept = scratch.at<std::uint32_t>(0);
+  for (std::uint32_t k = 0; k < 10; ++k)
+    EXPECT_EQ(kept[k], 7 * k + 1) << k;
+  EXPECT_EQ(scratch.at<double>(64)[99999], 0.5 * 99999.0);
+  // A smaller view is the same memory.
+  EXPECT_EQ(static_cast<const void*>(scratch.view<double>(64, 5)),
+            static_cast<const void*>(scratch.at<double>(64)));
+}
+
 TEST(Determinism, SameAccelerationsWithOneAndTwoThreads) {
   auto run = [](int threads) {
     omp_set_num_threads(threads);
