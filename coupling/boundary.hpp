@@ -467,7 +467,7 @@ class Boundaries {
   struct WallCandidates {
     const Fluid* fluid = nullptr;
     std::uint64_t build = 0;
-    std::vector<std::uint64_t> offset;  ///< (n + 1)
+    ListStarts offset;  ///< (n + 1)
     std::vector<std::uint32_t> index;
     int reach = 0;  ///< cells of kNearCandidates in the static set's flags (0: none yet)
   };

@@ -27,7 +27,7 @@ void Boundaries::addWallTerms(const Fluid& fluid, const BodyPlacement& at,
 void Boundaries::prepareWallCandidates(const Fluid& fluid) {
   WallCandidates& c = wall_candidates_;
   const double skin = fluid.neighborSkin();
-  const std::vector<Vec3>& x = fluid.neighborReference();
+  const std::vector<Vec3f>& x = fluid.neighborReference();
   const std::size_t n = x.size();
   // A sample within the support of a particle now is within support + skin / 2 of where
   // it was (it has moved less than skin / 2); a hair more for rounding.
@@ -54,7 +54,7 @@ void Boundaries::prepareWallCandidates(const Fluid& fluid) {
   }
   const std::int64_t sn = static_cast<std::int64_t>(n);
   auto each = [&](std::size_t i, auto&& f) {
-    const Vec3 xi = x[i];
+    const Vec3 xi = x[i].cast<double>();
     if (!nearStatic(xi, kNearCandidates)) return;
     static_.grid.forEachRangeInSphere(xi, reach, radius, false,
                                       [&](std::uint32_t lo, std::uint32_t hi) {
@@ -63,16 +63,16 @@ void Boundaries::prepareWallCandidates(const Fluid& fluid) {
                                             f(k);
                                       });
   };
-  c.offset.assign(n + 1, 0);
+  c.offset.resize(n + 1);
+  std::uint32_t* counts = c.offset.counts();
+  counts[n] = 0;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < sn; ++i) {
-    std::uint64_t count = 0;
+    std::uint32_t count = 0;
     each(static_cast<std::size_t>(i), [&](std::uint32_t) { ++count; });
-    c.offset[i + 1] = count;
+    counts[i] = count;
   }
-  for (std::size_t i = 0; i < n; ++i)
-    c.offset[i + 1] += c.offset[i];
-  c.index.resize(c.offset[n]);
+  c.index.resize(c.offset.startsFromCounts());
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < sn; ++i) {
     std::uint32_t* out = c.index.data() + c.offset[i];

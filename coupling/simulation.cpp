@@ -558,7 +558,10 @@ SimulationState Simulation::saveState() const {
   SimulationState s;
   static_cast<RunData&>(s) = data_;
   s.rigid = rigid_->saveState();
-  s.neighbor_reference = fluid_->neighborReference();
+  const std::vector<Vec3f>& reference = fluid_->neighborReference();
+  s.neighbor_reference.resize(reference.size());
+  for (std::size_t i = 0; i < reference.size(); ++i)
+    s.neighbor_reference[i] = reference[i].cast<double>();  // exact
   s.neighbor_reference_id = fluid_->neighborReferenceIds();
   return s;
 }

@@ -157,7 +157,8 @@ struct RunData {
 /// settings, restoreState() continues the run bit for bit.
 struct SimulationState : RunData {
   std::vector<double> rigid;  ///< RigidBodies::saveState()
-  /// Fluid::neighborReference() and its ids: where the fluid's lists were last built
+  /// Fluid::neighborReference() (its floats, exact as doubles) and its ids: where the
+  /// fluid's lists were last built
   /// (empty without a skin, or from a checkpoint written before skins: the first step
   /// then builds).
   std::vector<Vec3> neighbor_reference;

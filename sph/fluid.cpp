@@ -89,11 +89,11 @@ Fluid::Fluid(const FluidParams& params, const Aabb& domain, FluidState* state)
     throw std::invalid_argument("fluid.speed_of_sound must be finite and > 0");
 }
 
-void Fluid::fitGrid(const std::vector<Vec3>& x, double radius) {
+void Fluid::fitGrid(const Vec3* x, std::size_t count, double radius) {
   // Fit the grid to the particles' current bounds: cells of half the search radius
   // (125 small cells per query, fewer candidates) while that grid stays small; else
   // cells of the full radius (the domain-sized fallback checked at construction).
-  const std::int64_t n = static_cast<std::int64_t>(x.size());
+  const std::int64_t n = static_cast<std::int64_t>(count);
   double lo[3] = {domain_.max.x(), domain_.max.y(), domain_.max.z()};
   double hi[3] = {domain_.min.x(), domain_.min.y(), domain_.min.z()};
 #pragma omp parallel for schedule(static) reduction(min : lo[:3]) reduction(max : hi[:3])
@@ -121,43 +121,80 @@ void Fluid::setNeighborSkin(double skin) {
   ++generation_;
   candidates_ready_ = false;
   reference_.clear();
-  reference_id_.clear();
 }
 
-void Fluid::restoreNeighborReference(std::vector<Vec3> position, std::vector<std::uint32_t> id) {
-  reference_ = std::move(position);
-  reference_id_ = std::move(id);
+void Fluid::restoreNeighborReference(const std::vector<Vec3>& position,
+                                     const std::vector<std::uint32_t>& id) {
+  reference_.resize(position.size());
+  for (std::size_t i = 0; i < position.size(); ++i)
+    reference_[i] = position[i].cast<float>();
+  // Ids that are not one per position fit no particles: the next call builds.
+  if (id.size() != position.size()) reference_.clear();
+  reference_ids_ = idDigest(id);
   ++generation_;
   candidates_ready_ = false;
 }
 
+std::vector<std::uint32_t> Fluid::neighborReferenceIds() const {
+  if (reference_.size() != state_.size() || idDigest(state_.id) != reference_ids_) return {};
+  return state_.id;
+}
+
+namespace {
+/// splitmix64's finaliser: a bijection of 64-bit words that mixes every bit.
+std::uint64_t mix64(std::uint64_t z) {
+  z += 0x9e3779b97f4a7c15u;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+  return z ^ (z >> 31);
+}
+}  // namespace
+
+std::uint64_t Fluid::idDigest(const std::vector<std::uint32_t>& id) {
+  std::uint64_t sum = 0;
+  const std::int64_t n = static_cast<std::int64_t>(id.size());
+#pragma omp parallel for schedule(static) reduction(+ : sum)
+  for (std::int64_t i = 0; i < n; ++i)
+    sum += mix64((std::uint64_t(i) << 32) | id[i]);
+  return sum;
+}
+
 bool Fluid::buildCandidates() {
   const double radius = kernel_.supportRadius() + skin_;
-  fitGrid(reference_, radius);
+  // The reference in double precision after the sort's order and cells.
   const std::size_t n = reference_.size();
-  std::uint32_t* order = step_.view<std::uint32_t>(0, 2 * n);
-  grid_.sort(reference_.data(), n, order, order + n);
+  Vec3* rounded = step_.view<Vec3>(8 * n, n);
+  std::uint32_t* order = step_.view<std::uint32_t>(0, 2 * n);  // within: the block stays
+  const std::int64_t sn = static_cast<std::int64_t>(n);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < sn; ++i)
+    rounded[i] = reference_[i].cast<double>();
+  fitGrid(rounded, n, radius);
+  grid_.sort(rounded, n, order, order + n);
   for (std::size_t k = 0; k < n; ++k)
     if (order[k] != k) return false;
-  buildPairLists(grid_, reference_, radius, neighbors_);
+  buildPairLists(grid_, rounded, n, radius, neighbors_);
   return true;
 }
 
 bool Fluid::movedFromReference() const {
   const std::size_t n = state_.size();
-  if (reference_.size() != n || reference_id_.size() != n) return true;
+  if (reference_.size() != n) return true;
   // Two particles each skin / 2 closer than at the build: a pair within the support that
   // was not a candidate. (A hair less than skin / 2: rounding in the distances.)
   const double limit = 0.5 * skin_ * (1.0 - 1e-9);
   const double limit_sq = limit * limit;
   int moved = 0;
+  std::uint64_t ids = 0;  // idDigest(state_.id), in the same pass
   const std::int64_t sn = static_cast<std::int64_t>(n);
-#pragma omp parallel for schedule(static) reduction(max : moved)
+#pragma omp parallel for schedule(static) reduction(max : moved) reduction(+ : ids)
   for (std::int64_t i = 0; i < sn; ++i) {
-    const bool far = !((state_.position[i] - reference_[i]).squaredNorm() < limit_sq);
-    moved = std::max(moved, int(far || state_.id[i] != reference_id_[i]));
+    const bool far =
+        !((state_.position[i] - reference_[i].cast<double>()).squaredNorm() < limit_sq);
+    moved = std::max(moved, int(far));
+    ids += mix64((std::uint64_t(i) << 32) | state_.id[i]);
   }
-  return moved != 0;
+  return moved != 0 || ids != reference_ids_;
 }
 
 bool Fluid::skinPays(double dt) const {
@@ -185,27 +222,52 @@ void Fluid::updateNeighbors(double dt) {
   }
   ++builds_;
   ++generation_;
-  const bool skinned = skinPays(dt);
-  fitGrid(state_.position, support + (skinned ? skin_ : 0.0));
-  // The order, the points' cells and the ids' gather space in the step's scratch.
+  // In the step's scratch: the sort's order, the points' cells, the ids' gather space, and
+  // with a skin the positions rounded to float (the reference's: what the candidates are
+  // listed of).
   const std::size_t n = state_.size();
-  std::uint32_t* order = step_.view<std::uint32_t>(0, 3 * n);
-  grid_.sort(state_.position.data(), n, order, order + n);
+  bool skinned = skinPays(dt);
+  Vec3* rounded = skinned ? step_.view<Vec3>((12 * n + 7) / 8 * 8, n) : nullptr;
+  std::uint32_t* order = step_.view<std::uint32_t>(0, 3 * n);  // within: the block stays
+  if (skinned) skinned = roundedWithinSkin(rounded);
+  const Vec3* keys = skinned ? rounded : state_.position.data();
+  fitGrid(keys, n, support + (skinned ? skin_ : 0.0));
+  grid_.sort(keys, n, order, order + n);
   state_.permute(order, order + 2 * n);
   if (!skinned) {
     // No reference: the next call builds again.
     reference_.clear();
-    reference_id_.clear();
     candidates_ready_ = false;
     buildPairLists(grid_, state_.position, support, neighbors_);
     return;
   }
   ++skinned_builds_;
-  reference_ = state_.position;
-  reference_id_ = state_.id;
-  buildPairLists(grid_, state_.position, support + skin_, neighbors_);
+  reference_.resize(n);
+  const std::int64_t sn = static_cast<std::int64_t>(n);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < sn; ++i) {
+    reference_[i] = state_.position[i].cast<float>();
+    rounded[i] = reference_[i].cast<double>();  // in the sorted order now
+  }
+  reference_ids_ = idDigest(state_.id);
+  buildPairLists(grid_, rounded, n, support + skin_, neighbors_);
   candidates_ready_ = true;
   keepPairsWithin(neighbors_, state_.position, support);
+}
+
+bool Fluid::roundedWithinSkin(Vec3* rounded) const {
+  // As movedFromReference: every particle must be within skin / 2 of where the candidates
+  // are listed from, from the start.
+  const double limit = 0.5 * skin_ * (1.0 - 1e-9);
+  const double limit_sq = limit * limit;
+  int far = 0;
+  const std::int64_t sn = static_cast<std::int64_t>(state_.size());
+#pragma omp parallel for schedule(static) reduction(max : far)
+  for (std::int64_t i = 0; i < sn; ++i) {
+    rounded[i] = state_.position[i].cast<float>().cast<double>();
+    far = std::max(far, int(!((state_.position[i] - rounded[i]).squaredNorm() < limit_sq)));
+  }
+  return far == 0;
 }
 
 namespace {

@@ -121,7 +121,8 @@ class Fluid {
   const FluidState& state() const { return state_; }
   /// The pairs within the support radius, each once (buildPairLists).
   const PairLists& neighbors() const { return neighbors_; }
-  /// Bounds of the particles' positions at the last sort (updateNeighbors; empty: none).
+  /// Bounds of the particles' positions at the last sort (updateNeighbors; empty: none;
+  /// with a skin, of the positions rounded to float the candidates were listed of).
   const Aabb& particleBounds() const { return bounds_; }
 
   /// The pairs within the support radius of the particles now (neighbors()). Without a
@@ -160,9 +161,24 @@ class Fluid {
   /// what decides the next build. restoreNeighborReference sets them again (a saved run's),
   /// so that a continued run builds where the uninterrupted one would (a reference that
   /// does not fit the particles, or is not in their grid order, means a build).
-  const std::vector<Vec3>& neighborReference() const { return reference_; }
-  const std::vector<std::uint32_t>& neighborReferenceIds() const { return reference_id_; }
-  void restoreNeighborReference(std::vector<Vec3> position, std::vector<std::uint32_t> id);
+  ///
+  /// The positions are kept in single precision (12 bytes a particle, not 24): a build with
+  /// a skin sorts and lists the candidates of the positions rounded to float, so the lists
+  /// are exactly those of the reference as kept (and as saved: a float is a double), and a
+  /// particle counts as moved when it is skin / 2 from its rounded position. A skin narrower
+  /// than twice the rounding (coordinates beyond ~2^23 skins from the origin) is not built.
+  const std::vector<Vec3f>& neighborReference() const { return reference_; }
+  ///
+  /// The ids are kept as a 64-bit digest of (slot, id) over the slots (idDigest): a change
+  /// of one slot's id always changes it, of several a change goes unseen with odds of
+  /// 2^-64. neighborReferenceIds gives the ids when the particles are still those of the
+  /// reference (the state's ids), else none (the next call builds either way).
+  std::vector<std::uint32_t> neighborReferenceIds() const;
+  void restoreNeighborReference(const std::vector<Vec3>& position,
+                                const std::vector<std::uint32_t>& id);
+  /// The sum over slots i of a bijective 64-bit mix of (i, id[i]) (not depending on the
+  /// number of threads).
+  static std::uint64_t idDigest(const std::vector<std::uint32_t>& id);
   /// Summation density over fluid neighbours (no boundary share; the coupling adds it).
   void computeFluidDensity();
   /// Tait pressure from density, clamped at zero (no tensile pull at free surfaces).
@@ -224,15 +240,15 @@ class Fluid {
   /// With a skin, also the candidates: the pairs within support + skin at the last build
   /// (of reference_), those within the support first (keepPairsWithin).
   PairLists neighbors_;
-  bool candidates_ready_ = false;            ///< neighbors_ holds the candidates of reference_
-  double skin_ = 0;                          ///< m
-  std::uint64_t builds_ = 0;                 ///< sorts and builds so far
-  std::uint64_t skinned_builds_ = 0;         ///< of those, with candidates in the skin
-  std::uint64_t generation_ = 0;             ///< neighborGeneration()
-  std::vector<Vec3> reference_;              ///< (n) m, positions at the last build (skin)
-  std::vector<std::uint32_t> reference_id_;  ///< (n) ids at the last build (skin)
-  std::vector<double> inv_rho_;              ///< (n) 1 / rho (m^3/kg), this step
-  bool pressure_term_ = true;                ///< computePressure (true) or computeWithoutPressure
+  bool candidates_ready_ = false;     ///< neighbors_ holds the candidates of reference_
+  double skin_ = 0;                   ///< m
+  std::uint64_t builds_ = 0;          ///< sorts and builds so far
+  std::uint64_t skinned_builds_ = 0;  ///< of those, with candidates in the skin
+  std::uint64_t generation_ = 0;      ///< neighborGeneration()
+  std::vector<Vec3f> reference_;      ///< (n) m, positions at the last build (skin)
+  std::uint64_t reference_ids_ = 0;   ///< idDigest of the ids at the last build
+  std::vector<double> inv_rho_;       ///< (n) 1 / rho (m^3/kg), this step
+  bool pressure_term_ = true;         ///< computePressure (true) or computeWithoutPressure
   /// The step's scratch, in turn: the sort's order, cells and id gather (3 n uint32,
   /// updateNeighbors); the force loop's partial sums (6 n doubles); from predict() on, the
   /// step's start velocities and the predicted positions (2 n Vec3).
@@ -240,14 +256,17 @@ class Fluid {
 
   bool wide_lanes_ = hasWideLanes();
 
-  /// Fits the grid to the bounds of `x` for pairs within `radius`.
-  void fitGrid(const std::vector<Vec3>& x, double radius);
+  /// Fits the grid to the bounds of the n points from `x` on for pairs within `radius`.
+  void fitGrid(const Vec3* x, std::size_t n, double radius);
   /// Builds the candidates (into neighbors_) from reference_ (sorted positions); false
-  /// when reference_ is not in the grid's order.
+  /// when reference_ is not in the grid's order. Uses the step's scratch.
   bool buildCandidates();
   /// Whether some particle moved skin / 2 or more from reference_, or the particles
   /// are not those of reference_.
   bool movedFromReference() const;
+  /// The particles' positions rounded to float (n, into `rounded`), and whether each is
+  /// less than skin / 2 from its own (else the skin is too thin for them: no candidates).
+  bool roundedWithinSkin(Vec3* rounded) const;
   /// Whether a build now should list candidates: a skin, and the fastest particle needs
   /// kMinSkinSteps steps of dt to cross half of it.
   bool skinPays(double dt) const;

@@ -140,6 +140,21 @@ void UniformGrid::sort(const Vec3* points, std::size_t n, std::uint32_t* order,
   cell_start_[0] = 0;
 }
 
+void ListStarts::set(std::size_t i, std::uint64_t start) {
+  if (!trySet(i, start))
+    throw std::length_error("neighbour lists: over 2^32 entries in one block of points");
+}
+
+std::uint64_t ListStarts::startsFromCounts() {
+  std::uint64_t total = 0;
+  for (std::size_t i = 0; i < low_.size(); ++i) {
+    const std::uint32_t count = low_[i];
+    set(i, total);
+    total += count;
+  }
+  return total;
+}
+
 std::size_t PairLists::rangeOf(std::size_t i) const {
   return static_cast<std::size_t>(std::upper_bound(range.begin(), range.end(), i) - range.begin()) -
          1;
@@ -249,8 +264,12 @@ void fillPairLists(std::size_t n, PairLists& out, Row row) {
   out.before.resize(ranges);
   out.begin.resize(n);
   out.count.resize(n);
+  out.end.assign(ranges, 0);
   std::vector<std::size_t> spans(ranges, 0);
-#pragma omp parallel for schedule(static, 1) num_threads(static_cast <int>(ranges))
+  int too_long = 0;
+#pragma omp parallel for schedule(static, 1) num_threads(static_cast <int>(ranges)) \
+    reduction(max                                                                   \
+              : too_long)
   for (std::int64_t sr = 0; sr < static_cast<std::int64_t>(ranges); ++sr) {
     const std::size_t r = static_cast<std::size_t>(sr);
     std::vector<std::uint32_t>& local = out.later[r];
@@ -258,12 +277,15 @@ void fillPairLists(std::size_t n, PairLists& out, Row row) {
     for (std::size_t i = out.range[r]; i < out.range[r + 1]; ++i) {
       const std::size_t before = used;
       used = row(r, i, local, used);
-      out.begin[i] = before;
+      too_long = std::max(too_long, int(!out.begin.trySet(i, before)));
       out.count[i] = static_cast<std::uint32_t>(used - before);
       if (used > before) span = std::max<std::size_t>(span, local[used - 1] - i);
     }
+    out.end[r] = used;
     spans[r] = span;
   }
+  if (too_long)
+    throw std::length_error("neighbour lists: over 2^32 entries in one block of points");
   out.span = ranges ? *std::max_element(spans.begin(), spans.end()) : 0;
   buildBeforeLists(out);
 }
@@ -272,13 +294,17 @@ void fillPairLists(std::size_t n, PairLists& out, Row row) {
 
 void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
                     PairLists& out) {
-  const std::size_t n = points.size();
+  buildPairLists(grid, points.data(), points.size(), radius, out);
+}
+
+void buildPairLists(const UniformGrid& grid, const Vec3* points, std::size_t n, double radius,
+                    PairLists& out) {
   const double radius_sq = radius * radius;
   const std::size_t ranges = static_cast<std::size_t>(omp_get_max_threads());
   out.range.resize(ranges + 1);
-  for (std::size_t r = 0; r <= ranges; ++r)
-    out.range[r] = n * r / ranges;
-  out.candidates.clear();
+  for (std::size_t r = 0; r < ranges; ++r)  // at multiples of a block of list starts
+    out.range[r] = n * r / ranges / ListStarts::kBlock * ListStarts::kBlock;
+  out.range[ranges] = n;
   // The later neighbours of each point (every pair tested once). Branch-free append: write
   // every candidate, advance the cursor only for neighbours.
   fillPairLists(
@@ -304,7 +330,6 @@ void keepPairsWithin(PairLists& lists, const std::vector<Vec3>& points, double r
   const std::size_t n = points.size();
   if (lists.size() != n || lists.ranges() == 0)
     throw std::logic_error("keepPairsWithin: the lists are for another number of points");
-  if (lists.candidates.size() != n) lists.candidates = lists.count;  // all listed: candidates
   const double radius_sq = radius * radius;
   const std::size_t ranges = lists.ranges();
   std::vector<std::size_t> spans(ranges, 0);
@@ -318,7 +343,8 @@ void keepPairsWithin(PairLists& lists, const std::vector<Vec3>& points, double r
     std::vector<std::uint32_t> copy;
     std::size_t span = 0;
     for (std::size_t i = lists.range[r]; i < lists.range[r + 1]; ++i) {
-      const std::uint32_t kept = lists.count[i], all = lists.candidates[i];
+      const std::uint32_t kept = lists.count[i];
+      const std::uint32_t all = static_cast<std::uint32_t>(lists.candidates(i, r));
       std::uint32_t* list = lists.later[r].data() + lists.begin[i];
       if (within.size() < all) within.resize(all);
       const double xi = points[i][0], yi = points[i][1], zi = points[i][2];

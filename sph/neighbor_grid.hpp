@@ -220,12 +220,52 @@ class UniformGrid {
   std::vector<RowStretch> stretches_;
 };
 
+/// Where each point's list starts in a buffer of lists laid one after another (4 bytes a
+/// point, not 8): a 64-bit start per block of kBlock points, and each point's start as 32
+/// bits from its block's. A block's points are set in ascending order (its first one
+/// first); set throws std::length_error where a point's start lies 2^32 entries or more
+/// past its block's (over 67 million entries a point).
+class ListStarts {
+ public:
+  static constexpr unsigned kBlockBits = 6;
+  static constexpr std::size_t kBlock = std::size_t(1) << kBlockBits;
+
+  std::uint64_t operator[](std::size_t i) const { return block_[i >> kBlockBits] + low_[i]; }
+  std::size_t size() const { return low_.size(); }
+  void resize(std::size_t n) {
+    low_.resize(n);
+    block_.resize((n + kBlock - 1) >> kBlockBits);
+  }
+  /// Whether start could be set for point i (within 2^32 of its block's start; always
+  /// for a block's first point), and then sets it.
+  bool trySet(std::size_t i, std::uint64_t start) {
+    if ((i & (kBlock - 1)) == 0) block_[i >> kBlockBits] = start;
+    const std::uint64_t d = start - block_[i >> kBlockBits];
+    if (d > 0xffffffffu) return false;
+    low_[i] = static_cast<std::uint32_t>(d);
+    return true;
+  }
+  void set(std::size_t i, std::uint64_t start);
+  /// Starts from counts: fill counts() (n) with each point's entries, then
+  /// startsFromCounts() lays the lists one after another from 0 and returns their total
+  /// (throws as set).
+  std::uint32_t* counts() { return low_.data(); }
+  std::uint64_t startsFromCounts();
+  /// Bytes held.
+  std::size_t bytes() const { return low_.capacity() * 4 + block_.capacity() * 8; }
+
+ private:
+  std::vector<std::uint32_t> low_;    ///< (n) start - block start
+  std::vector<std::uint64_t> block_;  ///< (blocks) the start of each block's first point
+};
+
 /// Each pair of points within a radius once, in the list of its lower index: what the
 /// symmetric pair loops (sph/fluid.cpp) read. The points are cut into ranges, one per
 /// thread of the build (a loop over the pairs runs range by range, each range writing only
 /// its own points):
 /// - the later neighbours (j > i) of point i, ascending, are
-///   later[r][begin[i] .. begin[i] + count[i]) (r: i's range);
+///   later[r][begin[i] .. begin[i] + count[i]) (r: i's range); the ranges start at
+///   multiples of ListStarts::kBlock (a block of starts lies in one range's buffer);
 /// - the earlier neighbours of point i that lie before its range's start (the pairs a
 ///   range computes from its own side), ascending, are before[r][before_offset[r][q] ..
 ///   before_offset[r][q + 1]) with q = i - range[r], for q < before_offset[r].size() - 1;
@@ -233,16 +273,22 @@ class UniformGrid {
 struct PairLists {
   std::vector<std::size_t> range;  ///< (ranges + 1): range r is [range[r], range[r + 1])
   std::vector<std::vector<std::uint32_t>> later;                  ///< (ranges)
-  std::vector<std::uint64_t> begin;                               ///< (n) into later[r]
+  ListStarts begin;                                               ///< (n) into later[r]
   std::vector<std::uint32_t> count;                               ///< (n)
   std::vector<std::vector<std::uint32_t>> before_offset, before;  ///< (ranges)
   std::size_t span = 0;                                           ///< largest j - i of a pair
-  /// (n) or empty: lists filtered in place (keepPairsWithin) hold point i's candidates,
-  /// candidates[i] of them from begin[i], its count[i] pairs first; empty: no others.
-  std::vector<std::uint32_t> candidates;
+  /// (ranges) The end of range r's last list in later[r]: the lists lie one after another,
+  /// each point's from begin[i] to the next one's start. Lists filtered in place
+  /// (keepPairsWithin) hold point i's candidates there (candidates(i, r)), its count[i]
+  /// pairs first; after a build every entry is a pair.
+  std::vector<std::uint64_t> end;
 
   std::size_t size() const { return count.size(); }
   std::size_t ranges() const { return range.empty() ? 0 : range.size() - 1; }
+  /// The entries of point i's list (its candidates; r: i's range).
+  std::uint64_t candidates(std::size_t i, std::size_t r) const {
+    return (i + 1 < range[r + 1] ? begin[i + 1] : end[r]) - begin[i];
+  }
   /// The range of point i.
   std::size_t rangeOf(std::size_t i) const;
 };
@@ -251,6 +297,9 @@ struct PairLists {
 /// per OpenMP thread. `points` must be in the grid's sorted order. The lists do not depend
 /// on the number of threads; only where the ranges are cut does.
 void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
+                    PairLists& out);
+/// As buildPairLists, for the n points from `points` on.
+void buildPairLists(const UniformGrid& grid, const Vec3* points, std::size_t n, double radius,
                     PairLists& out);
 
 /// Keeps of the pairs `lists` holds (pair lists of the same points, e.g. built with a larger

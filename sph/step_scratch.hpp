@@ -1,7 +1,6 @@
 #pragma once
 
 #include <cstddef>
-#include <cstring>
 #include <memory>
 #include <type_traits>
 
@@ -15,8 +14,8 @@ namespace wake {
 class StepScratch {
  public:
   /// `count` elements of type T from byte `offset` (a multiple of alignof(T)) on, the block
-  /// grown to hold them; growing keeps the bytes already held (a view of the phase before
-  /// stays what it was), the new bytes are undefined.
+  /// grown to hold them. Growing gives new memory (the old block is freed first: never
+  /// both at once) and ends every view before; a view within the block keeps the others.
   template <class T>
   T* view(std::size_t offset, std::size_t count) {
     static_assert(std::is_trivially_destructible<T>::value && std::is_standard_layout<T>::value,
@@ -39,9 +38,9 @@ class StepScratch {
   static constexpr std::size_t kAlign = alignof(std::max_align_t);
   void reserve(std::size_t bytes) {
     if (bytes <= bytes_) return;
-    std::unique_ptr<unsigned char[]> grown(new unsigned char[bytes]);
-    if (bytes_ > 0) std::memcpy(grown.get(), data_.get(), bytes_);
-    data_ = std::move(grown);
+    data_.reset();
+    bytes_ = 0;
+    data_.reset(new unsigned char[bytes]);
     bytes_ = bytes;
   }
   std::unique_ptr<unsigned char[]> data_;

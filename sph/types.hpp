@@ -10,6 +10,9 @@
 namespace wake {
 
 using Vec3 = Eigen::Vector3d;
+/// Single precision: where a position is kept only to compare with (Fluid's neighbour
+/// reference).
+using Vec3f = Eigen::Vector3f;
 using Quat = Eigen::Quaterniond;
 
 /// Axis-aligned box, in metres.

@@ -176,25 +176,28 @@ TEST(Accelerations, ExtraTermsInTheAccelerationArrayItselfAreAddedAsFromTheirOwn
                std::invalid_argument);
 }
 
-TEST(StepScratch, AViewGrownKeepsWhatTheLastOneWrote) {
+TEST(StepScratch, ViewsWithinTheBlockShareItAndAGrownOneHoldsAll) {
   StepScratch scratch;
+  // The largest view first, then others within it: all valid together.
+  double* sums = scratch.view<double>(64, 100000);
+  const std::size_t bytes = scratch.bytes();
+  EXPECT_GE(bytes, 64 + 100000 * sizeof(double));
   std::uint32_t* ids = scratch.view<std::uint32_t>(0, 10);
   for (std::uint32_t k = 0; k < 10; ++k)
     ids[k] = 7 * k + 1;
-  EXPECT_GE(scratch.bytes(), 10 * sizeof(std::uint32_t));
-  // A larger view (another phase's type, past the first) moves the block; the bytes held
-  // before stay.
-  double* sums = scratch.view<double>(64, 100000);
   for (std::size_t k = 0; k < 100000; ++k)
     sums[k] = 0.5 * double(k);
-  EXPECT_GE(scratch.bytes(), 64 + 100000 * sizeof(double));
+  EXPECT_EQ(scratch.bytes(), bytes);
   const std::uint32_t* kept = scratch.at<std::uint32_t>(0);
   for (std::uint32_t k = 0; k < 10; ++k)
     EXPECT_EQ(kept[k], 7 * k + 1) << k;
   EXPECT_EQ(scratch.at<double>(64)[99999], 0.5 * 99999.0);
-  // A smaller view is the same memory.
-  EXPECT_EQ(static_cast<const void*>(scratch.view<double>(64, 5)),
-            static_cast<const void*>(scratch.at<double>(64)));
+  EXPECT_EQ(static_cast<const void*>(scratch.view<double>(64, 5)), static_cast<const void*>(sums));
+  // A view past the block grows it to hold the whole view.
+  double* more = scratch.view<double>(bytes, 1000);
+  EXPECT_GE(scratch.bytes(), bytes + 1000 * sizeof(double));
+  more[999] = 1.0;
+  EXPECT_EQ(scratch.at<double>(bytes)[999], 1.0);
 }
 
 TEST(Determinism, SameAccelerationsWithOneAndTwoThreads) {
@@ -290,13 +293,16 @@ TEST(Determinism, PairLoopsGiveTheBitsOfOneNeighbourAtATime) {
   omp_set_num_threads(threads_before);
 }
 
-TEST(Neighbors, SkinKeepsThePairsAndDensitiesAndBuildsLessOften) {
-  // A jittered block whose particles move at random velocities (a few tenths of a
-  // millimetre per step, the skin 4 mm): with the skin the lists are built only now and
-  // then, yet every step has the same pairs as lists built every step, and the same
-  // densities up to the order of their sums. Removing a particle builds at once.
+/// A jittered block whose particles move at random velocities (a few tenths of a
+/// millimetre per step, the skin 4 mm), its corner at `origin`: with the skin the lists are
+/// built only now and then (when `skinned`: else every step, the skin too thin for the
+/// positions rounded to float there), yet every step has the same pairs as lists built
+/// every step, and the same densities up to the order of their sums. Removing a particle
+/// builds at once.
+void checkSkinnedBlock(const Vec3& origin, bool skinned_builds) {
   FluidParams params = testParams();
-  Fluid every(params, kDomain), skinned(params, kDomain);
+  const Aabb domain{kDomain.min + origin, kDomain.max + origin};
+  Fluid every(params, domain), skinned(params, domain);
   skinned.setNeighborSkin(0.1 * params.supportRadius());
   std::mt19937 rng(41);
   std::uniform_real_distribution<double> u(-1, 1);
@@ -306,7 +312,7 @@ TEST(Neighbors, SkinKeepsThePairsAndDensitiesAndBuildsLessOften) {
     const Vec3 jitter = 0.003 * Vec3(u(rng), u(rng), u(rng));
     const Vec3 v = Vec3(u(rng), u(rng), u(rng));
     for (Fluid* f : {&every, &skinned}) {
-      f->state().position[i] += jitter;
+      f->state().position[i] += origin + jitter;
       f->state().velocity[i] = v;
     }
   }
@@ -338,9 +344,77 @@ TEST(Neighbors, SkinKeepsThePairsAndDensitiesAndBuildsLessOften) {
         f->state().position[i] += 2e-4 * f->state().velocity[i];
   }
   EXPECT_EQ(every.neighborBuilds(), std::uint64_t(steps));
+  if (!skinned_builds) {
+    EXPECT_EQ(skinned.neighborBuilds(), std::uint64_t(steps));
+    EXPECT_EQ(skinned.neighborSkinnedBuilds(), 0u);
+    EXPECT_TRUE(skinned.neighborReference().empty());
+    return;
+  }
   EXPECT_GE(skinned.neighborBuilds(), 3u);  // it did build again as the particles moved
   EXPECT_LE(skinned.neighborBuilds(), std::uint64_t(steps / 4));
-  EXPECT_THROW(skinned.setNeighborSkin(-1.0), std::invalid_argument);
+  EXPECT_EQ(skinned.neighborSkinnedBuilds(), skinned.neighborBuilds());
+}
+
+TEST(Neighbors, SkinKeepsThePairsAndDensitiesAndBuildsLessOften) {
+  checkSkinnedBlock(Vec3::Zero(), true);
+  Fluid fluid(testParams(), kDomain);
+  EXPECT_THROW(fluid.setNeighborSkin(-1.0), std::invalid_argument);
+}
+
+TEST(Neighbors, SkinKeepsThePairsAHundredMetresFromTheOrigin) {
+  // The reference positions are floats (rounding ~4e-6 m at 100 m, the skin 4 mm): the
+  // same pairs, as rarely built.
+  checkSkinnedBlock(Vec3(100.0, -100.0, 60.0), true);
+}
+
+TEST(Neighbors, SkinTooThinForFloatsFarFromTheOriginIsNotBuilt) {
+  // 300 km out a float's rounding (~8 mm) exceeds half the skin: lists built at every call
+  // from the double positions, the pairs still exact.
+  checkSkinnedBlock(Vec3(3.0e5, 1.0, -2.0e5), false);
+}
+
+TEST(Neighbors, ParticlesThatAreNotTheReferencesBuildAgain) {
+  // The reference's ids are a digest: the same particles keep the lists; another id in
+  // one slot, two ids swapped, or a particle fewer and one more (as many as before) build
+  // again; the saved ids are the state's while it holds the reference's particles.
+  FluidParams params = testParams();
+  Fluid fluid(params, kDomain);
+  fluid.setNeighborSkin(0.1 * params.supportRadius());
+  fillLattice(fluid, 6, 0.019);
+  FluidState& st = fluid.state();
+  fluid.updateNeighbors();
+  std::uint64_t builds = fluid.neighborBuilds();
+  fluid.updateNeighbors();
+  EXPECT_EQ(fluid.neighborBuilds(), builds) << "the same particles";
+  EXPECT_EQ(fluid.neighborReferenceIds(), st.id);
+  auto expectBuild = [&](const char* what) {
+    EXPECT_TRUE(fluid.neighborReferenceIds().empty()) << what;
+    fluid.updateNeighbors();
+    EXPECT_EQ(fluid.neighborBuilds(), builds + 1) << what;
+    builds = fluid.neighborBuilds();
+    EXPECT_EQ(fluid.neighborReferenceIds(), st.id) << what;
+  };
+  st.id[17] += 1000;
+  expectBuild("one id changed");
+  std::swap(st.id[3], st.id[150]);
+  expectBuild("two ids swapped");
+  const std::uint32_t last = st.id.back();
+  std::vector<std::uint8_t> remove(st.size(), 0);
+  remove[40] = 1;
+  st.removeIf(remove);
+  st.append(st.position.back() + Vec3(0.001, 0, 0), Vec3::Zero(), last + 1,
+            params.kinematic_viscosity);
+  expectBuild("one removed, one added");
+  // A restored reference with other ids than the particles': a build.
+  std::vector<Vec3> reference(st.position);
+  std::vector<std::uint32_t> ids(st.id);
+  ids[5] += 1;
+  fluid.restoreNeighborReference(reference, ids);
+  expectBuild("restored with another id");
+  ids[5] -= 1;
+  fluid.restoreNeighborReference(reference, ids);
+  fluid.updateNeighbors();
+  EXPECT_EQ(fluid.neighborBuilds(), builds) << "restored with the particles' own ids";
 }
 
 TEST(Neighbors, SkinIsListedOnlyWhenItLastsSeveralSteps) {

@@ -159,6 +159,73 @@ TEST(Neighbors, OutsideDomainIsClampedNotLost) {
   expectMatchesBruteForce(x, kCube, 0.3);
 }
 
+TEST(Neighbors, ListStartsKeepSixtyFourBitStartsInFourBytesAPoint) {
+  // Starts far beyond 2^32 (a block's own start), lists of every length up to 2^32 - 1
+  // entries in a block; one entry more throws.
+  ListStarts starts;
+  const std::size_t n = 3 * ListStarts::kBlock + 5;
+  starts.resize(n);
+  std::vector<std::uint64_t> expected(n);
+  std::uint64_t at = (std::uint64_t(1) << 40) + 3;
+  for (std::size_t i = 0; i < n; ++i) {
+    expected[i] = at;
+    starts.set(i, at);
+    at += (i % 7 == 3) ? 0x07ffffffu : i;  // a few long lists
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    EXPECT_EQ(starts[i], expected[i]) << i;
+  EXPECT_LE(starts.bytes(), 4 * n + 8 * (n / ListStarts::kBlock + 1) + 64);
+  // From counts: the same as setting the running sums.
+  ListStarts from;
+  from.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    from.counts()[i] = static_cast<std::uint32_t>(i + 1 < n ? expected[i + 1] - expected[i] : 9);
+  EXPECT_EQ(from.startsFromCounts(), expected[n - 1] - expected[0] + 9);
+  for (std::size_t i = 0; i < n; ++i)
+    EXPECT_EQ(from[i], expected[i] - expected[0]) << i;
+  // 2^32 - 1 past the block's start fits; 2^32 does not.
+  ListStarts edge;
+  edge.resize(ListStarts::kBlock);
+  const std::uint64_t most = 0xffffffffu;
+  edge.set(0, 100);
+  edge.set(1, 100 + most);
+  EXPECT_EQ(edge[1], 100 + most);
+  EXPECT_THROW(edge.set(2, 100 + most + 1), std::length_error);
+}
+
+TEST(Neighbors, RangesStartAtBlocksOfListStarts) {
+  // Lists built on 1 to 3 threads for point counts around a block: every range starts at a
+  // multiple of ListStarts::kBlock, and the lists are the brute force's.
+  const int threads_before = omp_get_max_threads();
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(0.0, 0.3);
+  for (std::size_t count :
+       {std::size_t(5), ListStarts::kBlock - 1, ListStarts::kBlock + 1, std::size_t(1000)}) {
+    std::vector<Vec3> x(count);
+    for (Vec3& p : x)
+      p = Vec3(u(rng), u(rng), u(rng));
+    const double r = 0.08;
+    UniformGrid grid(Aabb{Vec3::Zero(), Vec3::Constant(0.3)}, r);
+    std::vector<std::uint32_t> order;
+    grid.sort(x, order);
+    std::vector<Vec3> sorted(count);
+    for (std::size_t k = 0; k < count; ++k)
+      sorted[k] = x[order[k]];
+    for (int threads = 1; threads <= 3; ++threads) {
+      omp_set_num_threads(threads);
+      PairLists lists;
+      buildPairLists(grid, sorted, r, lists);
+      ASSERT_EQ(lists.ranges(), std::size_t(threads));
+      for (std::size_t q = 0; q < lists.ranges(); ++q)
+        EXPECT_EQ(lists.range[q] % ListStarts::kBlock, 0u) << count << " points, range " << q;
+      EXPECT_EQ(lists.range.back(), count);
+      expectPairLists(lists, bruteForce(sorted, r),
+                      std::to_string(count) + " points, " + std::to_string(threads) + " threads");
+    }
+  }
+  omp_set_num_threads(threads_before);
+}
+
 TEST(Neighbors, SparseStartsAreTheDenseOnes) {
   // Few points in many cells, as boundary samples: a plane's samples (a row full of
   // points), two walls across every row (the tank's ends), points a cell or two apart
@@ -408,11 +475,12 @@ TEST(Neighbors, PairsKeptInPlaceStepAfterStepAreThePairsOfEachStep) {
       filterPairLists(built, now, r, fresh);
       EXPECT_EQ(fresh.count, lists.count) << what;
       EXPECT_EQ(fresh.span, lists.span) << what;
-      ASSERT_EQ(lists.candidates, built.count) << what;
       for (std::size_t i = 0; i < sorted.size(); ++i) {
         const std::size_t rg = lists.rangeOf(i);
+        ASSERT_EQ(lists.candidates(i, rg), built.count[i]) << "point " << i << ", " << what;
         const std::uint32_t* list = lists.later[rg].data() + lists.begin[i];
-        const std::uint32_t kept = lists.count[i], all = lists.candidates[i];
+        const std::uint32_t kept = lists.count[i];
+        const std::uint32_t all = static_cast<std::uint32_t>(lists.candidates(i, rg));
         ASSERT_TRUE(std::is_sorted(list + kept, list + all)) << "point " << i << ", " << what;
         std::vector<std::uint32_t> set(list, list + all);
         std::sort(set.begin(), set.end());
