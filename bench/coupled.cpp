@@ -5,6 +5,7 @@
 //   wake_bench_coupled [--particles N] [--bodies B] [--steps S] [--warmup W] [--threads 1,2]
 #include "bench/common.hpp"
 #include "bullet_bridge/scene_world.hpp"
+#include "io/process.hpp"
 
 #include <omp.h>
 
@@ -52,6 +53,7 @@ std::pair<SimulationSettings, std::vector<BodySpec>> pool(long particles, int bo
 }  // namespace
 
 int main(int argc, char** argv) {
+  wake::mapLargeBlocksApart();
   const Options opt = parse(argc, argv);
   std::printf(
       "# Wake coupled benchmark: %ld requested particles, %d floating boxes, "

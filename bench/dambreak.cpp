@@ -13,6 +13,7 @@
 #include "bench/common.hpp"
 #include "bullet_bridge/scene_world.hpp"
 #include "coupling/simulation.hpp"
+#include "io/process.hpp"
 #include "io/scene.hpp"
 
 #include <sys/resource.h>
@@ -79,6 +80,7 @@ Bench make(const Options& opt) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  wake::mapLargeBlocksApart();
   const Options opt = parse(argc, argv);
   std::printf(
       "# Wake dam-break benchmark: %s, %ld requested particles, %d warm-up + %d timed "

@@ -14,6 +14,7 @@
 // second, 1 thread, DFSPH's max_dt 1 ms.
 #include "bullet_bridge/scene_world.hpp"
 #include "coupling/simulation.hpp"
+#include "io/process.hpp"
 #include "io/scene.hpp"
 
 #include <omp.h>
@@ -89,6 +90,7 @@ Options parse(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  wake::mapLargeBlocksApart();
   const Options opt = parse(argc, argv);
   omp_set_num_threads(opt.threads);
   std::printf("# Wake solver benchmark: %s, %.3g simulated s, %d thread(s)\n", opt.scene.c_str(),

@@ -10,6 +10,7 @@
 // (density share, velocity control, position correction) and the rigid bodies (Bullet).
 // Prints one Markdown table row per scene.
 #include "bullet_bridge/scene_world.hpp"
+#include "io/process.hpp"
 #include "io/scene.hpp"
 
 #include <omp.h>
@@ -23,6 +24,7 @@
 #include <vector>
 
 int main(int argc, char** argv) {
+  wake::mapLargeBlocksApart();
   double resolution = 1.0, end = 0.0;
   int threads = 0;
   long steps = 0;

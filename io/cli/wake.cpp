@@ -14,6 +14,7 @@
 // Exit status: 0 success, 2 bad input (scene, options), 1 a run that failed.
 // Every error is one line on stderr: "wake: error: <message>".
 #include "io/files.hpp"
+#include "io/process.hpp"
 #include "io/run.hpp"
 #include "io/scene.hpp"
 #include "io/surfaces.hpp"
@@ -261,6 +262,7 @@ struct RenderCommand {
 }  // namespace
 
 int main(int argc, char** argv) {
+  wake::mapLargeBlocksApart();
   CLI::App app("Wake: a weakly compressible SPH fluid coupled to rigid bodies by direct forcing.",
                "wake");
   app.set_version_flag("--version", std::string("wake ") + wake::wakeVersion());
