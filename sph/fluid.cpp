@@ -141,8 +141,10 @@ std::vector<std::uint32_t> Fluid::neighborReferenceIds() const {
 }
 
 namespace {
-/// splitmix64's finaliser: a bijection of 64-bit words that mixes every bit.
-std::uint64_t mix64(std::uint64_t z) {
+/// Slot i's share of Fluid::idDigest: splitmix64's finaliser (a bijection of 64-bit words
+/// that mixes every bit) of (i, id).
+std::uint64_t slotDigest(std::uint64_t i, std::uint32_t id) {
+  std::uint64_t z = (i << 32) | id;
   z += 0x9e3779b97f4a7c15u;
   z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
   z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
@@ -155,7 +157,7 @@ std::uint64_t Fluid::idDigest(const std::vector<std::uint32_t>& id) {
   const std::int64_t n = static_cast<std::int64_t>(id.size());
 #pragma omp parallel for schedule(static) reduction(+ : sum)
   for (std::int64_t i = 0; i < n; ++i)
-    sum += mix64((std::uint64_t(i) << 32) | id[i]);
+    sum += slotDigest(static_cast<std::uint64_t>(i), id[i]);
   return sum;
 }
 
@@ -192,7 +194,7 @@ bool Fluid::movedFromReference() const {
     const bool far =
         !((state_.position[i] - reference_[i].cast<double>()).squaredNorm() < limit_sq);
     moved = std::max(moved, int(far));
-    ids += mix64((std::uint64_t(i) << 32) | state_.id[i]);
+    ids += slotDigest(static_cast<std::uint64_t>(i), state_.id[i]);
   }
   return moved != 0 || ids != reference_ids_;
 }
@@ -449,7 +451,7 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
       // P / rho^2 of each side, (P rho^-1) rho^-1 (one neighbour at a time: the same bits).
       const M inv_rho_j = gatherLanes(zero, in.inv_rho, j);
       M coeff = zero;
-      if (in.p) coeff = M::all(pr2_i) + gatherLanes(zero, in.p, j) * inv_rho_j * inv_rho_j;
+      if (p) coeff = M::all(pr2_i) + gatherLanes(zero, p, j) * inv_rho_j * inv_rho_j;
       const M vx = du * dx + dv * dy + dw * dz;
       coeff = select(vx < zero,
                      coeff + M::all(-in.visc) / (M::all(in.rho[i]) + gatherLanes(zero, in.rho, j)) *

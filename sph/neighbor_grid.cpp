@@ -140,9 +140,14 @@ void UniformGrid::sort(const Vec3* points, std::size_t n, std::uint32_t* order,
   cell_start_[0] = 0;
 }
 
+namespace {
+[[noreturn]] void throwListsTooLong() {
+  throw std::length_error("neighbour lists: over 2^32 entries in one block of points");
+}
+}  // namespace
+
 void ListStarts::set(std::size_t i, std::uint64_t start) {
-  if (!trySet(i, start))
-    throw std::length_error("neighbour lists: over 2^32 entries in one block of points");
+  if (!trySet(i, start)) throwListsTooLong();
 }
 
 std::uint64_t ListStarts::startsFromCounts() {
@@ -267,9 +272,8 @@ void fillPairLists(std::size_t n, PairLists& out, Row row) {
   out.end.assign(ranges, 0);
   std::vector<std::size_t> spans(ranges, 0);
   int too_long = 0;
-#pragma omp parallel for schedule(static, 1) num_threads(static_cast <int>(ranges)) \
-    reduction(max                                                                   \
-              : too_long)
+  const int threads = static_cast<int>(ranges);
+#pragma omp parallel for schedule(static, 1) num_threads(threads) reduction(max : too_long)
   for (std::int64_t sr = 0; sr < static_cast<std::int64_t>(ranges); ++sr) {
     const std::size_t r = static_cast<std::size_t>(sr);
     std::vector<std::uint32_t>& local = out.later[r];
@@ -284,8 +288,7 @@ void fillPairLists(std::size_t n, PairLists& out, Row row) {
     out.end[r] = used;
     spans[r] = span;
   }
-  if (too_long)
-    throw std::length_error("neighbour lists: over 2^32 entries in one block of points");
+  if (too_long) throwListsTooLong();
   out.span = ranges ? *std::max_element(spans.begin(), spans.end()) : 0;
   buildBeforeLists(out);
 }
