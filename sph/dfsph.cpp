@@ -13,13 +13,7 @@ namespace wake {
 
 namespace {
 
-/// Sums of one particle while its factor is found: sum_b g_ab and sum_b |g_ab|^2.
-struct GradientSums {
-  Vec3 g = Vec3::Zero();
-  double sq = 0.0;
-  std::uint32_t count = 0;     ///< fluid neighbours
-  Vec3 offset = Vec3::Zero();  ///< sum_b |g_ab|^2 (x_b - x_a)
-};
+using GradientSums = DfsphGradientSums;
 
 /// Neighbours of a particle inside a fluid at rest on the lattice (spacing s, support 2H):
 /// the lattice points closer than the support, itself left out.
@@ -222,7 +216,8 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
   const std::uint8_t* near = near_wall_.data();
   const Vec3* x = st.position.data();
   lists_.resize(pairs.ranges());
-  std::vector<GradientSums> sums(n);
+  std::vector<GradientSums>& sums = sums_;  // kept: no allocation per step
+  sums.assign(n, GradientSums{});
   auto sum_row = rowSums<Quad2>;
 #if defined(WAKE_HAS_LANES4)
   if (fluid.wideLanes()) sum_row = rowSums4;

@@ -90,6 +90,15 @@ struct SolverBoundary {
   std::vector<Vec3> hydrostatic_above;
 };
 
+/// Sums of one particle while DivergenceFreeSolver::prepare finds its factor: sum_b g_ab
+/// and sum_b |g_ab|^2.
+struct DfsphGradientSums {
+  Vec3 g = Vec3::Zero();
+  double sq = 0.0;
+  std::uint32_t count = 0;     ///< fluid neighbours
+  Vec3 offset = Vec3::Zero();  ///< sum_b |g_ab|^2 (x_b - x_a)
+};
+
 class DivergenceFreeSolver {
  public:
   explicit DivergenceFreeSolver(const DfsphParams& params) : params_(params) {}
@@ -158,6 +167,7 @@ class DivergenceFreeSolver {
   std::vector<Vec3> grad_sum_;                ///< (n) sum_b g_ab (kg/m^4)
   std::vector<std::uint8_t> sparse_;          ///< (n) too few neighbours for the divergence solve
   std::vector<std::uint8_t> near_wall_;       ///< (n) G_a != 0: samples in a's support
+  std::vector<DfsphGradientSums> sums_;       ///< (n) scratch of prepare()
   std::vector<double> weight_;                ///< (n) sum_b w_ab (with a boundary)
   std::vector<Vec3> centre_;                  ///< (n) c_a (m, with a boundary)
   std::vector<double> rate_;                  ///< (n) D_a
