@@ -165,8 +165,8 @@ bool Fluid::buildCandidates() {
   const double radius = kernel_.supportRadius() + skin_;
   // The reference in double precision after the sort's order and cells.
   const std::size_t n = reference_.size();
-  Vec3* rounded = step_.view<Vec3>(8 * n, n);
-  std::uint32_t* order = step_.view<std::uint32_t>(0, 2 * n);  // within: the block stays
+  Vec3* rounded = sortScratchRounded(n);
+  std::uint32_t* order = sortScratchOrder(n);
   const std::int64_t sn = static_cast<std::int64_t>(n);
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < sn; ++i)
@@ -179,13 +179,26 @@ bool Fluid::buildCandidates() {
   return true;
 }
 
-bool Fluid::movedFromReference() const {
-  const std::size_t n = state_.size();
-  if (reference_.size() != n) return true;
+double Fluid::skinLimitSq() const {
   // Two particles each skin / 2 closer than at the build: a pair within the support that
   // was not a candidate. (A hair less than skin / 2: rounding in the distances.)
   const double limit = 0.5 * skin_ * (1.0 - 1e-9);
-  const double limit_sq = limit * limit;
+  return limit * limit;
+}
+
+std::uint32_t* Fluid::sortScratchOrder(std::size_t n) {
+  return step_.view<std::uint32_t>(0, 3 * n);
+}
+
+Vec3* Fluid::sortScratchRounded(std::size_t n) {
+  // After the order, the cells and the ids' gather (3 n uint32), at a double's alignment.
+  return step_.view<Vec3>((12 * n + 7) / 8 * 8, n);
+}
+
+bool Fluid::movedFromReference() const {
+  const std::size_t n = state_.size();
+  if (reference_.size() != n) return true;
+  const double limit_sq = skinLimitSq();
   int moved = 0;
   std::uint64_t ids = 0;  // idDigest(state_.id), in the same pass
   const std::int64_t sn = static_cast<std::int64_t>(n);
@@ -229,8 +242,8 @@ void Fluid::updateNeighbors(double dt) {
   // listed of).
   const std::size_t n = state_.size();
   bool skinned = skinPays(dt);
-  Vec3* rounded = skinned ? step_.view<Vec3>((12 * n + 7) / 8 * 8, n) : nullptr;
-  std::uint32_t* order = step_.view<std::uint32_t>(0, 3 * n);  // within: the block stays
+  Vec3* rounded = skinned ? sortScratchRounded(n) : nullptr;
+  std::uint32_t* order = sortScratchOrder(n);
   if (skinned) skinned = roundedWithinSkin(rounded);
   const Vec3* keys = skinned ? rounded : state_.position.data();
   fitGrid(keys, n, support + (skinned ? skin_ : 0.0));
@@ -260,8 +273,7 @@ void Fluid::updateNeighbors(double dt) {
 bool Fluid::roundedWithinSkin(Vec3* rounded) const {
   // As movedFromReference: every particle must be within skin / 2 of where the candidates
   // are listed from, from the start.
-  const double limit = 0.5 * skin_ * (1.0 - 1e-9);
-  const double limit_sq = limit * limit;
+  const double limit_sq = skinLimitSq();
   int far = 0;
   const std::int64_t sn = static_cast<std::int64_t>(state_.size());
 #pragma omp parallel for schedule(static) reduction(max : far)

@@ -264,6 +264,14 @@ class Fluid {
   /// Whether some particle moved skin / 2 or more from reference_, or the particles
   /// are not those of reference_.
   bool movedFromReference() const;
+  /// The square of the distance from its reference at which a particle counts as moved
+  /// (a hair under skin / 2).
+  double skinLimitSq() const;
+  /// A build's views of the step's scratch: the sort's order, then the points' cells and
+  /// the ids' gather space (3 n uint32); the positions rounded to float, as doubles (n),
+  /// after them. Take the rounded view first: the order's lies within it.
+  std::uint32_t* sortScratchOrder(std::size_t n);
+  Vec3* sortScratchRounded(std::size_t n);
   /// The particles' positions rounded to float (n, into `rounded`), and whether each is
   /// less than skin / 2 from its own (else the skin is too thin for them: no candidates).
   bool roundedWithinSkin(Vec3* rounded) const;
