@@ -56,6 +56,9 @@ TEST(StoneSkipping, GlobalBouncesThenSinks) {
 TEST(StoneSkipping, LocalBouncesThenSinks) {
   checkStoneSkips("stone_skipping_local");
 }
+TEST(StoneSkipping, DivergenceFreeBouncesThenSinks) {
+  checkStoneSkips("stone_skipping_dfsph");
+}
 
 // --- Impact (Fig. 8) --------------------------------------------------------------------
 
@@ -172,8 +175,8 @@ TEST(ViscousDrag, SphereSinksLessInTheMoreViscousFluid) {
 
 // --- Sinking ship (Fig. 5) and vessel (Fig. 6): single-layer walls ----------------------
 
-TEST(SinkingShip, FillsAndSinksWithoutLeaks) {
-  const SceneOutput out("sinking_ship");
+void checkShipFillsThroughItsSlot(const std::string& scene) {
+  const SceneOutput out(scene);
   const test::BodyTrack& ship = out.body("ship");
   const std::size_t last = out.frames() - 1;
   // The hull in the frame of its scene position (its centre of mass lies 1.5 cm lower):
@@ -218,16 +221,23 @@ TEST(SinkingShip, FillsAndSinksWithoutLeaks) {
     inside += inHull(local(last, x));
   const double sunk = ship.pose[0].position.y() - ship.pose[last].position.y();
   std::printf(
-      "[ sinking ship ] sank %.3f m; %zu fluid particles inside the hull at the end; "
+      "[ %s ] sank %.3f m; %zu fluid particles inside the hull at the end; "
       "entries: %zu through the slot, %zu over the rim, %zu through the walls; "
       "max_penetrating %d\n",
-      sunk, inside, through_slot, over_rim, through_walls,
+      scene.c_str(), sunk, inside, through_slot, over_rim, through_walls,
       out.summary()["max_penetrating"].get<int>());
   EXPECT_EQ(out.summary()["max_penetrating"].get<int>(), 0);
   EXPECT_EQ(through_walls, 0u);
   EXPECT_GT(through_slot, 200u);
   EXPECT_GT(inside, 200u);
   EXPECT_GT(sunk, 0.1);
+}
+
+TEST(SinkingShip, FillsAndSinksWithoutLeaks) {
+  checkShipFillsThroughItsSlot("sinking_ship");
+}
+TEST(SinkingShip, DivergenceFreeFillsAndSinksWithoutLeaks) {
+  checkShipFillsThroughItsSlot("sinking_ship_dfsph");
 }
 
 TEST(Vessel, FloatsKeepingItsWaterWithoutLeaks) {
