@@ -240,8 +240,10 @@ class Boundaries {
   /// step's pairs (addWallTerms) with the bodies at `at`, into `out` (SolverBoundary):
   /// G_a = rho0 sum_k V_k grad_a W_ak (world); B_a = rho0 sum_k V_k v_k . grad_a W_ak, v_k
   /// the sample's velocity (its body's at `at`; zero for static bodies); the samples within
-  /// the kernel support; H_a = sum_k V_k g . (x_k - x_a) grad_a W_ak under `gravity`, split
-  /// into the samples below x_a and those above.
+  /// the kernel support; H_a = sum_k V_k chi_a g . (x_k - x_a) grad_a W_ak under `gravity`,
+  /// chi_a = 1 for the samples below x_a, for those above a's mean pressure (the state's
+  /// pressure_mean, or its pressure before one is kept) over the weight of a support's
+  /// height of fluid, within [0, 1]; and chi_a (SolverBoundary::above_share).
   void solverTerms(const Fluid& fluid, const BodyPlacement& at, const WallPairs& pairs,
                    const Vec3& gravity, SolverBoundary& out) const;
   /// Makes the walls' share of the density agree with a fluid that starts at rest on the
@@ -259,12 +261,13 @@ class Boundaries {
   /// samples k in each particle's velocity change over the step (sph/dfsph.hpp): particle a
   /// pushes them with m wall_impulse_a rho0 V_k grad_a W_ak / dt plus the hydrostatic part
   /// m V_k (chi g . (x_k - x_a) + lift_a) grad_a W_ak, chi = 1 for the samples below x_a and
-  /// above_a for those above (DivergenceFreeSolver::wallLift, wallAbove). Adds the force and
-  /// its torque about the centre of mass to `reaction`, summed in fixed particle chunks: the
-  /// same bits on any number of threads.
+  /// above_share_a for those above (DivergenceFreeSolver::wallLift; SolverBoundary::above_share
+  /// of the step's solverTerms).
+  /// Adds the force and its torque about the centre of mass to `reaction`, summed in fixed
+  /// particle chunks: the same bits on any number of threads.
   void addSolverReaction(const Fluid& fluid, const BodyPlacement& at, const WallPairs& pairs,
                          const std::vector<double>& wall_impulse, const std::vector<double>& lift,
-                         const std::vector<double>& above, const Vec3& gravity, double dt,
+                         const std::vector<double>& above_share, const Vec3& gravity, double dt,
                          std::vector<Wrench>& reaction) const;
 
   /// Most bodies one fluid particle is in contact with at once (the nearest are kept).
@@ -411,14 +414,13 @@ class Boundaries {
     double* flux = nullptr;           ///< += sum_k V_k (u + omega x x_k) . grad W_ak
     Vec3* moment = nullptr;           ///< += sum_k x_k x V_k grad W_ak
     std::uint32_t* within = nullptr;  ///< += the samples within the support
-    /// With `gravity` (set space): the samples below p (g . (x_k - p) > 0) add
-    /// V_k g . (x_k - p) grad W_ak to `hydrostatic`, those above to `hydrostatic_above`, and
-    /// their moments to the `_moment`s when those are given.
+    /// With `gravity` (set space): V_k g . (x_k - p) grad W_ak is added to `hydrostatic`,
+    /// times above_share for the samples above p (g . (x_k - p) < 0), and its moment to
+    /// `hydrostatic_moment` when that is given.
     const Vec3* gravity = nullptr;
+    double above_share = 1.0;
     Vec3* hydrostatic = nullptr;
-    Vec3* hydrostatic_above = nullptr;
     Vec3* hydrostatic_moment = nullptr;
-    Vec3* hydrostatic_above_moment = nullptr;
   };
   /// sum_k V_k grad W_ak over the `count` samples `near` of one set at p (set space), and
   /// the `extras` asked for (u, omega: the set's velocity, set space).

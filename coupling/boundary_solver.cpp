@@ -22,16 +22,12 @@ Vec3 Boundaries::gradientSum(const SampleSet& set, const Vec3& p, const std::uin
     if (extras.flux) *extras.flux += (u + omega.cross(set.position[k])).dot(g);
     if (extras.moment) *extras.moment += set.position[k].cross(g);
     if (!extras.gravity) return;
-    // g . (x_k - p) = -g . d: the weight of the fluid between p and a sample below it.
-    const double rise = -extras.gravity->dot(d);
-    if (rise > 0.0) {
-      *extras.hydrostatic += rise * g;
-      if (extras.hydrostatic_moment) *extras.hydrostatic_moment += rise * set.position[k].cross(g);
-    } else {
-      *extras.hydrostatic_above += rise * g;
-      if (extras.hydrostatic_above_moment)
-        *extras.hydrostatic_above_moment += rise * set.position[k].cross(g);
-    }
+    // g . (x_k - p) = -g . d: the weight of the fluid between p and the sample; above p
+    // (negative) its share above_share.
+    const double up = -extras.gravity->dot(d);
+    const double rise = up > 0.0 ? up : extras.above_share * up;
+    *extras.hydrostatic += rise * g;
+    if (extras.hydrostatic_moment) *extras.hydrostatic_moment += rise * set.position[k].cross(g);
   });
   return sum;
 }
@@ -45,8 +41,10 @@ void Boundaries::solverTerms(const Fluid& fluid, const BodyPlacement& at, const 
   out.flux.assign(n, 0.0);
   out.neighbors.assign(n, 0u);
   out.hydrostatic.assign(n, Vec3::Zero());
-  out.hydrostatic_above.assign(n, Vec3::Zero());
+  out.above_share.assign(n, 0.0);
   const double rho0 = fluid_.rest_density;
+  const std::vector<double>& mean = st.keepsPressureMean() ? st.pressure_mean : st.pressure;
+  const double deep = rho0 * gravity.norm() * kernel_.supportRadius();
   const std::size_t chunks = (n + kChunk - 1) / kChunk;
   const Vec3 zero = Vec3::Zero();
 #pragma omp parallel for schedule(static)
@@ -54,17 +52,18 @@ void Boundaries::solverTerms(const Fluid& fluid, const BodyPlacement& at, const 
     const std::size_t end = std::min(n, (c + 1) * kChunk);
     for (std::size_t i = c * kChunk; i < end; ++i) {
       const Vec3 xi = st.position[i];
-      Vec3 g = Vec3::Zero(), h = Vec3::Zero(), h_above = Vec3::Zero();
+      const double chi = deep > 0.0 ? std::clamp(mean[i] / deep, 0.0, 1.0) : 0.0;
+      Vec3 g = Vec3::Zero(), h = Vec3::Zero();
       double b = 0.0;
       std::uint32_t within = 0;
       pairs.forEachSegment(
           i, c, c * kChunk, [&](std::uint32_t set, const std::uint32_t* near, std::uint32_t count) {
             GradientExtras extras;
             extras.within = &within;
+            extras.above_share = chi;
             if (set == 0) {
               extras.gravity = &gravity;
               extras.hydrostatic = &h;
-              extras.hydrostatic_above = &h_above;
               g += gradientSum(static_, xi, near, count, zero, zero, extras);
               return;
             }
@@ -74,21 +73,19 @@ void Boundaries::solverTerms(const Fluid& fluid, const BodyPlacement& at, const 
             const Vec3 p = rt * (xi - f.pose.position);
             // The samples' velocity in the set's frame: v_c + omega x x_k, both turned.
             const Vec3 g_set = rt * gravity;
-            Vec3 h_set = Vec3::Zero(), h_above_set = Vec3::Zero();
+            Vec3 h_set = Vec3::Zero();
             extras.flux = &b;
             extras.gravity = &g_set;
             extras.hydrostatic = &h_set;
-            extras.hydrostatic_above = &h_above_set;
             g += f.rotation * gradientSum(m.samples, p, near, count, rt * f.linear_velocity,
                                           rt * f.angular_velocity, extras);
             h += f.rotation * h_set;
-            h_above += f.rotation * h_above_set;
           });
       out.gradient[i] = rho0 * g;
       out.flux[i] = rho0 * b;
       out.neighbors[i] = within;
       out.hydrostatic[i] = h;
-      out.hydrostatic_above[i] = h_above;
+      out.above_share[i] = chi;
     }
   }
 }
@@ -96,12 +93,13 @@ void Boundaries::solverTerms(const Fluid& fluid, const BodyPlacement& at, const 
 void Boundaries::addSolverReaction(const Fluid& fluid, const BodyPlacement& at,
                                    const WallPairs& pairs, const std::vector<double>& wall_impulse,
                                    const std::vector<double>& lift,
-                                   const std::vector<double>& above, const Vec3& gravity, double dt,
-                                   std::vector<Wrench>& reaction) const {
+                                   const std::vector<double>& above_share, const Vec3& gravity,
+                                   double dt, std::vector<Wrench>& reaction) const {
   const FluidState& st = fluid.state();
   const std::size_t n = st.size(), nb = bodies_.size();
   if (n == 0 || nb == 0) return;
-  if (pairs.particles != n || wall_impulse.size() != n || lift.size() != n || above.size() != n)
+  if (pairs.particles != n || wall_impulse.size() != n || lift.size() != n ||
+      above_share.size() != n)
     throw std::logic_error("Boundaries::addSolverReaction before addWallTerms or the solve");
   bool two_way = false;
   for (const MovingBody& m : moving_)
@@ -127,20 +125,17 @@ void Boundaries::addSolverReaction(const Fluid& fluid, const BodyPlacement& at,
             const Vec3 p = rt * (xi - f.pose.position);
             const Vec3 g_set = rt * gravity;
             Vec3 moment = Vec3::Zero(), h = Vec3::Zero(), h_moment = Vec3::Zero();
-            Vec3 h_above = Vec3::Zero(), h_above_moment = Vec3::Zero();
             GradientExtras extras;
             extras.moment = &moment;
             extras.gravity = &g_set;
+            extras.above_share = above_share[i];
             extras.hydrostatic = &h;
             extras.hydrostatic_moment = &h_moment;
-            extras.hydrostatic_above = &h_above;
-            extras.hydrostatic_above_moment = &h_above_moment;
             const Vec3 g = gradientSum(m.samples, p, near, count, zero, zero, extras);
             const double pressure = scale * wall_impulse[i] + mass * lift[i];
-            const double chi = mass * above[i];
             Wrench& w = chunk_reaction_[c * nb + m.body];
-            w.force += f.rotation * (pressure * g + mass * h + chi * h_above);
-            w.torque += f.rotation * (pressure * moment + mass * h_moment + chi * h_above_moment);
+            w.force += f.rotation * (pressure * g + mass * h);
+            w.torque += f.rotation * (pressure * moment + mass * h_moment);
           });
     }
   }

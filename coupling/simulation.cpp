@@ -473,8 +473,8 @@ void Simulation::predict(double dt) {
     timings_.forces += secondsSince(t0);
     t0 = Clock::now();
     boundaries_->addSolverReaction(*fluid_, work_.placed, work_.wall_pairs, dfsph_->wallImpulse(),
-                                   dfsph_->wallLift(), dfsph_->wallAbove(), model_.gravity, dt,
-                                   work_.wall_reaction);
+                                   dfsph_->wallLift(), work_.solver_boundary.above_share,
+                                   model_.gravity, dt, work_.wall_reaction);
     timings_.boundary += secondsSince(t0);
   }
   t0 = Clock::now();

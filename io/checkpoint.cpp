@@ -84,6 +84,8 @@ void writeCheckpoint(const std::string& path, const SimulationState& s,
     w.writeDataset(group, "kinematic_viscosity", H5T_NATIVE_DOUBLE, f.kinematic_viscosity.data(), n,
                    1);
     w.writeDataset(group, "id", H5T_NATIVE_UINT32, f.id.data(), n, 1);
+    if (f.keepsPressureMean())  // the divergence-free solver's (FluidState::pressure_mean)
+      w.writeDataset(group, "pressure_mean", H5T_NATIVE_DOUBLE, f.pressure_mean.data(), n, 1);
     // Where the neighbour lists were last built (their skin): a resumed run builds them
     // where the uninterrupted one would.
     w.writeDataset(group, "neighbor_reference", H5T_NATIVE_DOUBLE, s.neighbor_reference.data(),
@@ -176,6 +178,12 @@ SimulationState readCheckpoint(const std::string& path, CheckpointInfo* info) {
   f.pressure = r.readDataset<double>(group, "pressure", H5T_NATIVE_DOUBLE, 1);
   f.kinematic_viscosity = r.readDataset<double>(group, "kinematic_viscosity", H5T_NATIVE_DOUBLE, 1);
   f.id = r.readDataset<std::uint32_t>(group, "id", H5T_NATIVE_UINT32, 1);
+  // Written since the divergence-free solver keeps it; without it the solver starts it
+  // from the pressure.
+  if (H5Lexists(group, "pressure_mean", H5P_DEFAULT) > 0) {
+    f.keepPressureMean();
+    f.pressure_mean = r.readDataset<double>(group, "pressure_mean", H5T_NATIVE_DOUBLE, 1);
+  }
   // Written since the neighbour lists' skin; without them the resumed run builds at once.
   if (H5Lexists(group, "neighbor_reference", H5P_DEFAULT) > 0) {
     s.neighbor_reference = vec3s("neighbor_reference");

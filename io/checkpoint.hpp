@@ -11,8 +11,11 @@
 //                window_density_ratio; uint64 steps, removed_at_start, lost,
 //                max_penetrating, window_penetrating, last_contacts; datasets position,
 //                velocity, acceleration (n x 3), density, pressure, kinematic_viscosity,
-//                id (n) in the simulation's slot order, wrenches (bodies x 6: force,
-//                torque), rigid (the rigid-body integrator's numbers)
+//                id (n) in the simulation's slot order, pressure_mean (n; only with the
+//                divergence-free solver: FluidState::pressure_mean), neighbor_reference
+//                (n x 3) and neighbor_reference_id (n; where the lists were last built),
+//                wrenches (bodies x 6: force, torque), rigid (the rigid-body integrator's
+//                numbers)
 //   /output      (`wake run`'s checkpoints) datasets frame_address (frames, uint64: each
 //                output frame group's address in <scene>.h5.partial) and body_rows
 //                (frames * bodies x 14): the OutputIndex the resumed run rebuilds its

@@ -205,7 +205,7 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
   const bool walls = !boundary.gradient.empty();
   if (walls && (boundary.gradient.size() != n || boundary.flux.size() != n ||
                 boundary.neighbors.size() != n || boundary.hydrostatic.size() != n ||
-                boundary.hydrostatic_above.size() != n))
+                boundary.above_share.size() != n))
     throw std::logic_error("DivergenceFreeSolver::prepare: boundary terms of another size");
   boundary_ = walls ? &boundary : nullptr;
   // The particles with samples in their support: the walls' terms are theirs alone.
@@ -263,7 +263,6 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
   }
   wall_impulse_.assign(n, 0.0);  // a new step
   lift_.assign(n, 0.0);
-  above_.assign(n, 0.0);
   rates_fresh_ = false;
 }
 
@@ -417,19 +416,14 @@ void DivergenceFreeSolver::applyHydrostatic(Fluid& fluid, const Vec3& gravity, d
   const SolverBoundary& b = *boundary_;
   const double inv_rho0 = 1.0 / fluid.params().rest_density;
   const std::int64_t n = static_cast<std::int64_t>(st.size());
-  // Samples above a have less pressure than the fluid around it, by the weight between:
-  // all of it where a's own (last) pressure exceeds the weight of a support's height of
-  // fluid, less where a is near the free surface (never a pull towards a lid or a body's
-  // underside that the fluid barely touches).
-  const double deep = fluid.params().rest_density * gravity.norm() * fluid.kernel().supportRadius();
+  // The fluid around a lies below it (l < 0: under a lid or a floating body): the mean of
+  // its pressure is more than a's by the weight between, all of it deep in the fluid, less
+  // near the free surface (chi_a, as the samples above a).
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
-    const double chi = deep > 0.0 ? std::clamp(st.pressure[i] / deep, 0.0, 1.0) : 0.0;
     const double l = -gravity.dot(centre_[i]);
-    lift_[i] = l > 0.0 ? l : chi * l;
-    above_[i] = chi;
-    st.velocity[i] -= dt * (b.hydrostatic[i] + chi * b.hydrostatic_above[i] +
-                            (lift_[i] * inv_rho0) * b.gradient[i]);
+    lift_[i] = l > 0.0 ? l : b.above_share[i] * l;
+    st.velocity[i] -= dt * (b.hydrostatic[i] + (lift_[i] * inv_rho0) * b.gradient[i]);
   }
 }
 
@@ -477,6 +471,7 @@ int DivergenceFreeSolver::solveDensity(Fluid& fluid, const Vec3& gravity, double
   if (factor_.size() != n) throw std::logic_error("DivergenceFreeSolver: solve before prepare");
   const double rho0 = fluid.params().rest_density;
   const double inv_dt = 1.0 / dt;
+  st.keepPressureMean();
   s_.assign(n, 0.0);
   ds_.resize(n);
   // Warm start: half the last step's pressure (s = dt p / rho^2) where the fluid would be
@@ -511,9 +506,12 @@ int DivergenceFreeSolver::solveDensity(Fluid& fluid, const Vec3& gravity, double
     ++iterations;
   }
   const std::int64_t sn = static_cast<std::int64_t>(n);
+  const double follow = dt / (kPressureMeanTime + dt);
 #pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < sn; ++i)
+  for (std::int64_t i = 0; i < sn; ++i) {
     st.pressure[i] = s_[i] * st.density[i] * st.density[i] * inv_dt;
+    st.pressure_mean[i] += follow * (st.pressure[i] - st.pressure_mean[i]);
+  }
   stats_.density_iterations = iterations;
   return iterations;
 }

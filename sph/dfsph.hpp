@@ -29,18 +29,24 @@
 // Under gravity the samples' pressure also has the fluid's weight between them and the fluid
 // around the particle (the hydrostatic part of the walls' pressure, as
 // Boundaries::computeSamplePressure): once per density solve,
-//   dv_a = -dt (H_a + chi_a H^above_a + l_a G_a / rho0),
-// H_a and H^above_a = sum_k V_k g . (x_k - x_a) grad_a W_ak over the samples below and above
-// a (SolverBoundary::hydrostatic, hydrostatic_above), l_a = -g . c_a with c_a the centre of
-// the fluid around a (relative to a, with the weights of s^w_a), and chi_a in [0, 1] a's
-// last pressure over the weight of a support's height of fluid: the samples above a (a
-// floating body's underside, a lid) have less pressure than the fluid around a, but never
-// pull (chi_a, and l_a where negative, fade to 0 at the free surface). Without the samples
-// above, a box of half the water's density floated 8 % too high.
+//   dv_a = -dt (H_a + l_a G_a / rho0),
+// H_a = sum_k V_k chi g . (x_k - x_a) grad_a W_ak (SolverBoundary::hydrostatic): a sample
+// below a (chi = 1) has more pressure than a by the weight between, one above (a floating
+// body's underside, a lid; chi = chi_a) less. l_a = -g . c_a with c_a the centre of the fluid
+// around a (relative to a, with the weights of s^w_a), times chi_a where negative (the
+// fluid around a lies below it). chi_a in [0, 1] (SolverBoundary::above_share) is a's mean
+// pressure P_a (the state's pressure_mean, an exponential mean over kPressureMeanTime) over
+// the weight of a support's height of fluid: deep in the fluid the samples above a have
+// all of the difference, near the free surface less, never a pull (towards a lid or a
+// body's underside that the fluid barely touches). Without the samples above, a box of half
+// the water's density floated 8 % too high. The mean pressure, not the last step's: under
+// a light floating body the pressure comes in kicks (3 kPa for a step, then near 0 for
+// several, around a mean of 0.3 kPa under a box of 0.3 the water's density), and chi_a of
+// each step's pressure fell below 1 between kicks: the box floated 5 % high.
 //
 // The walls' and bodies' side of the impulse is the fluid's pressure force on them:
-// wallImpulse(), wallLift() and wallAbove() give it per particle for the coupling
-// (Boundaries::addSolverReaction).
+// wallImpulse() and wallLift() give it per particle for the coupling
+// (Boundaries::addSolverReaction, with SolverBoundary::above_share).
 //
 // prepare() stores each particle's whole neighbour list with its pairs' g_ab (floats; a
 // pair is computed once and stored in both lists), so that the iterations only read: each
@@ -83,11 +89,12 @@ struct SolverBoundary {
   std::vector<Vec3> gradient;  ///< (n) G_a = rho0 sum_k V_k grad_a W_ak (kg/m^4)
   std::vector<double> flux;    ///< (n) B_a = rho0 sum_k V_k v_k . grad_a W_ak (kg/(m^3 s))
   std::vector<std::uint32_t> neighbors;  ///< (n) samples within the kernel support
-  /// (n) H_a = sum_k V_k g . (x_k - x_a) grad_a W_ak (m/s^2) over the samples below a: the
-  /// weight of the fluid between a and them.
+  /// (n) H_a = sum_k V_k chi g . (x_k - x_a) grad_a W_ak (m/s^2): the weight of the fluid
+  /// between a and the samples below it (chi = 1), less chi_a that between a and those above.
   std::vector<Vec3> hydrostatic;
-  /// (n) The same over the samples above a (g . (x_k - x_a) < 0: their pressure is lower).
-  std::vector<Vec3> hydrostatic_above;
+  /// (n) chi_a in [0, 1]: a's mean pressure (the state's pressure_mean; its pressure before
+  /// the first solve keeps one) over the weight of a support's height of fluid.
+  std::vector<double> above_share;
 };
 
 /// Sums of one particle while DivergenceFreeSolver::prepare finds its factor: sum_b g_ab
@@ -101,6 +108,11 @@ struct DfsphGradientSums {
 
 class DivergenceFreeSolver {
  public:
+  /// s: the time over which the state's pressure_mean follows the pressure (each step
+  /// moves it dt / (kPressureMeanTime + dt) of the way). Longer than the kicks under a light
+  /// floating body (about 5 ms apart), short beside a particle's time to cross a support.
+  static constexpr double kPressureMeanTime = 0.02;
+
   explicit DivergenceFreeSolver(const DfsphParams& params) : params_(params) {}
 
   const DfsphParams& params() const { return params_; }
@@ -116,17 +128,17 @@ class DivergenceFreeSolver {
 
   /// The density solve on the predicted velocities v* (the fluid's velocities) for a step
   /// of `dt` under `gravity`, starting from the state's pressure (the last step's); writes
-  /// the pressure it found, p = rho^2 s / dt, to the state. Returns the iterations taken.
+  /// the pressure it found, p = rho^2 s / dt, to the state and moves the state's
+  /// pressure_mean towards it (kept from the first solve on). Returns the iterations taken.
   int solveDensity(Fluid& fluid, const Vec3& gravity, double dt);
 
   /// (n) The sum of s_a + s^w_a over this step's solves (prepare() clears it): the walls'
   /// and bodies' pressure share of particle a's velocity change was -wallImpulse[a] G_a.
   const std::vector<double>& wallImpulse() const { return wall_impulse_; }
-  /// (n) l_a of this step's density solve (m^2/s^2; zero without one) and (n) chi_a: the
-  /// hydrostatic share of a's velocity change was
-  /// -dt (H_a + chi_a H^above_a + wallLift[a] G_a / rho0), chi_a = wallAbove[a].
+  /// (n) l_a of this step's density solve (m^2/s^2; zero without one, faded by chi_a where
+  /// negative): the hydrostatic share of a's velocity change was
+  /// -dt (H_a + wallLift[a] G_a / rho0).
   const std::vector<double>& wallLift() const { return lift_; }
-  const std::vector<double>& wallAbove() const { return above_; }
 
   const DfsphStats& stats() const { return stats_; }
 
@@ -179,7 +191,6 @@ class DivergenceFreeSolver {
   std::vector<double> weighted_;              ///< (n) one iteration's sum_b w_ab ds_b (near walls)
   std::vector<double> wall_impulse_;          ///< (n) sum of s_a + s^w_a over the step's solves
   std::vector<double> lift_;                  ///< (n) l_a of the density solve
-  std::vector<double> above_;                 ///< (n) chi_a of the density solve
 };
 
 }  // namespace wake

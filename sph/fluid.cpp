@@ -50,6 +50,10 @@ void FluidState::permute(const std::uint32_t* order, std::uint32_t* id_scratch) 
   kinematic_viscosity.swap(density);
   gather(pressure, order, density);
   pressure.swap(density);
+  if (keep_pressure_mean_) {
+    gather(pressure_mean, order, density);
+    pressure_mean.swap(density);
+  }
   gather(id, order, id_scratch);
   std::copy(id_scratch, id_scratch + id.size(), id.begin());
 }
@@ -66,6 +70,13 @@ void FluidState::append(const Vec3& x, const Vec3& v, std::uint32_t particle_id,
   pressure.push_back(0.0);
   id.push_back(particle_id);
   kinematic_viscosity.push_back(nu);
+  if (keep_pressure_mean_) pressure_mean.push_back(0.0);
+}
+
+void FluidState::keepPressureMean() {
+  if (keep_pressure_mean_) return;
+  keep_pressure_mean_ = true;
+  pressure_mean = pressure;
 }
 
 void FluidState::reserve(std::size_t n) {

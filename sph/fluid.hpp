@@ -69,13 +69,21 @@ struct FluidState {
   std::vector<double> pressure;             ///< (n) Pa, >= 0
   std::vector<std::uint32_t> id;            ///< (n) permanent particle number
   std::vector<double> kinematic_viscosity;  ///< (n) m^2/s, nu of the particle's fluid
+  /// (n, or empty) Pa: the pressure's running mean over the last steps, kept only once a
+  /// solver asks for it (keepPressureMean: DivergenceFreeSolver, whose pressure is noisy
+  /// from step to step), empty otherwise. Persistent, like the pressure.
+  std::vector<double> pressure_mean;
 
   std::size_t size() const { return position.size(); }
+  /// From now on pressure_mean is kept with the other arrays (resize, removeIf, append,
+  /// permute, ...); starts as the pressure.
+  void keepPressureMean();
+  bool keepsPressureMean() const { return keep_pressure_mean_; }
   void resize(std::size_t n);
   /// Applies `order` (n; new slot k takes old slot order[k]) to the persistent
-  /// per-particle arrays (position, velocity, id, kinematic_viscosity, and pressure: the
-  /// pressure solver starts from the last step's). acceleration and density, derived each
-  /// step after the sort, serve as the gather space and are left undefined (sized n);
+  /// per-particle arrays (position, velocity, id, kinematic_viscosity, and pressure and
+  /// pressure_mean: the pressure solver starts from the last step's). acceleration and density,
+  /// derived each step after the sort, serve as the gather space and are left undefined (sized n);
   /// `id_scratch` (n) that of the ids. The one place that permutes particles: a new
   /// persistent field must be added here.
   void permute(const std::uint32_t* order, std::uint32_t* id_scratch);
@@ -99,7 +107,9 @@ struct FluidState {
     f(pressure);
     f(id);
     f(kinematic_viscosity);
+    if (keep_pressure_mean_) f(pressure_mean);
   }
+  bool keep_pressure_mean_ = false;
 };
 
 /// The fluid solver: its parameters (the model), the neighbour grid and scratch space, and

@@ -196,17 +196,36 @@ TEST(BuoyancyDfsph, PlacedBoxFloatsAtTheArchimedesDraft) {
   EXPECT_EQ(f.max_penetrating, 0u);
 }
 
-/// Dropped at the three density ratios (2 s each, 90 s on two threads: not in the suite's
-/// run; --gtest_also_run_disabled_tests runs it). Measured: drafts -5.3 / -2.4 / -1.7 % at
-/// ratios 0.3 / 0.5 / 0.7 (the lightest box floats too high: at 3 cm the solver's pressure
-/// noise is a larger share of its weight).
-TEST(BuoyancyDfsph, DISABLED_DroppedBoxFloatsAtTheArchimedesDraft) {
-  for (double ratio : {0.3, 0.5, 0.7}) {
-    const Floating f = floatBox(ratio, CouplingMethod::Local, 2.0, 0.0, false, FluidSolver::Dfsph);
-    EXPECT_NEAR(f.draft, ratio * 0.10, 0.03 * ratio * 0.10) << ratio;
-    EXPECT_LT(f.tilt, 0.1) << ratio;
-    EXPECT_EQ(f.max_penetrating, 0u) << ratio;
-  }
+/// Dropped from 1 cm (2 s each, 11 s on two threads). Measured: drafts -1.9 / -1.5 % at
+/// density ratios 0.5 / 0.7 (-2.4 / -1.7 % while the samples above a particle took their
+/// share of the last step's pressure instead of its running mean; sph/dfsph.hpp).
+void checkDroppedDfsph(double ratio) {
+  const Floating f = floatBox(ratio, CouplingMethod::Local, 2.0, 0.0, false, FluidSolver::Dfsph);
+  EXPECT_NEAR(f.draft, ratio * 0.10, 0.03 * ratio * 0.10);
+  EXPECT_LT(f.tilt, 0.1);
+  EXPECT_EQ(f.max_penetrating, 0u);
+}
+
+class BuoyancyDfsphDropped : public ::testing::TestWithParam<double> {};
+
+TEST_P(BuoyancyDfsphDropped, FloatsFlatAtTheArchimedesDraft) {
+  checkDroppedDfsph(GetParam());
+}
+
+INSTANTIATE_TEST_SUITE_P(Ratios, BuoyancyDfsphDropped, ::testing::Values(0.5, 0.7),
+                         [](const ::testing::TestParamInfo<double>& param) {
+                           return "density_" + std::to_string(int(std::lround(100 * param.param)));
+                         });
+
+/// The lightest box, 0.3 the water's density, floats too high with the divergence-free
+/// solver: draft -4.1 % (-5.3 % before the running mean). Not in the suite's run
+/// (--gtest_also_run_disabled_tests runs it). Under so light a body the solver's pressure
+/// comes in kicks: each step's solve holds the body's velocity fixed, the impulse that stops
+/// the fluid under it throws the light box up, and it falls back for a few steps (under
+/// the box 3 kPa for one step, then under 0.1 kPa, around a mean of 0.3 kPa). WCSPH floats
+/// it at -2.5 %.
+TEST(BuoyancyDfsph, DISABLED_DroppedLightBoxFloatsAtTheArchimedesDraft) {
+  checkDroppedDfsph(0.3);
 }
 
 /// Dropped onto the fluid, a box denser than the fluid sinks until it rests on the last

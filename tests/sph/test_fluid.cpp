@@ -200,6 +200,40 @@ TEST(StepScratch, ViewsWithinTheBlockShareItAndAGrownOneHoldsAll) {
   EXPECT_EQ(scratch.at<double>(bytes)[999], 1.0);
 }
 
+TEST(FluidState, PressureMeanIsKeptOnlyWhenAskedAndMovesWithItsParticle) {
+  FluidState st;
+  for (std::uint32_t k = 0; k < 6; ++k)
+    st.append(Vec3(k, 0, 0), Vec3::Zero(), 10 + k, 1e-6);
+  for (std::uint32_t k = 0; k < 6; ++k)
+    st.pressure[k] = 100.0 * k;
+  EXPECT_FALSE(st.keepsPressureMean());
+  st.resize(7);
+  EXPECT_TRUE(st.pressure_mean.empty());  // not kept: no memory
+  st.resize(6);
+  st.keepPressureMean();
+  ASSERT_TRUE(st.keepsPressureMean());
+  EXPECT_EQ(st.pressure_mean, st.pressure);  // starts as the pressure
+  for (std::uint32_t k = 0; k < 6; ++k)
+    st.pressure_mean[k] = 1000.0 + st.id[k];
+  // Every operation that moves, removes or adds particles moves their means with them.
+  const std::vector<std::uint32_t> order = {5, 3, 1, 0, 2, 4};
+  std::vector<std::uint32_t> scratch(6);
+  st.permute(order.data(), scratch.data());
+  st.removeIf({0, 1, 0, 0, 1, 0});
+  st.append(Vec3(9, 0, 0), Vec3::Zero(), 99, 1e-6);
+  st.reserve(64);
+  ASSERT_EQ(st.pressure_mean.size(), st.size());
+  for (std::size_t i = 0; i + 1 < st.size(); ++i) {
+    EXPECT_EQ(st.pressure_mean[i], 1000.0 + st.id[i]) << i;
+    EXPECT_EQ(st.pressure[i], 100.0 * (st.id[i] - 10)) << i;
+  }
+  EXPECT_EQ(st.pressure_mean.back(), 0.0);  // a new particle: no history
+  FluidState copy = st;
+  EXPECT_TRUE(copy.keepsPressureMean());
+  copy.resize(20);
+  EXPECT_EQ(copy.pressure_mean.size(), 20u);
+}
+
 TEST(Determinism, SameAccelerationsWithOneAndTwoThreads) {
   auto run = [](int threads) {
     omp_set_num_threads(threads);
