@@ -571,7 +571,8 @@ void Simulation::restoreState(const SimulationState& s) {
   const std::size_t n = f.size();
   const bool sizes_agree = f.velocity.size() == n && f.acceleration.size() == n &&
                            f.density.size() == n && f.pressure.size() == n && f.id.size() == n &&
-                           f.kinematic_viscosity.size() == n;
+                           f.kinematic_viscosity.size() == n &&
+                           (!f.keepsPressureMean() || f.pressure_mean.size() == n);
   require(sizes_agree, "state.fluid", "its arrays differ in length");
   require(s.wrenches.size() == data_.wrenches.size(), "state.wrenches",
           "has " + std::to_string(s.wrenches.size()) + " bodies, the simulation " +

@@ -109,8 +109,8 @@ struct DfsphGradientSums {
 class DivergenceFreeSolver {
  public:
   /// s: the time over which the state's pressure_mean follows the pressure (each step
-  /// moves it dt / (kPressureMeanTime + dt) of the way). Longer than the kicks under a light
-  /// floating body (about 5 ms apart), short beside a particle's time to cross a support.
+  /// moves it dt / (kPressureMeanTime + dt) of the way): several times the kicks' period
+  /// under a light floating body (about 5 ms).
   static constexpr double kPressureMeanTime = 0.02;
 
   explicit DivergenceFreeSolver(const DfsphParams& params) : params_(params) {}

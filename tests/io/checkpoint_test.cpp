@@ -436,6 +436,11 @@ TEST(Checkpoint, TheCppApiSavesAndRestoresARunBitForBit) {
     SimulationState wrong = readCheckpoint(file);
     wrong.wrenches.pop_back();
     EXPECT_THROW(b.coupled().simulation().restoreState(wrong), std::invalid_argument);
+    if (dfsph) {
+      SimulationState torn = readCheckpoint(file);
+      torn.fluid.pressure_mean.pop_back();
+      EXPECT_THROW(b.coupled().simulation().restoreState(torn), std::invalid_argument);
+    }
     EXPECT_THROW(readCheckpoint((dir.path / "none.h5").string()), std::runtime_error);
   }
 }
