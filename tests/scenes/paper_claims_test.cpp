@@ -1,6 +1,8 @@
 // The paper's experiments (Sec. VI) as demo scenes: checks of what each one claims, on
 // the output that `wake run` wrote for scenes/<name>.json (tests/CMakeLists.txt
-// runs every scene first, as the test scene_<name>).
+// runs every scene first, as the test scene_<name>), and the same checks with the
+// divergence-free solver (<name>_dfsph: a scene file of its own, or a copy that
+// tests/CMakeLists.txt makes).
 #include "scene_output.hpp"
 
 #include "demos/slip_front.hpp"
@@ -62,8 +64,8 @@ TEST(StoneSkipping, DivergenceFreeBouncesThenSinks) {
 
 // --- Impact (Fig. 8) --------------------------------------------------------------------
 
-TEST(Impact, DensityBoundedAndNoLeak) {
-  const SceneOutput out("impact");
+void checkImpact(const std::string& scene) {
+  const SceneOutput out(scene);
   const double r = particleRadius(out);
   const double ratio = out.summary()["max_density_ratio"].get<double>();
   // The impact on the water (the paper's claim) is over when the rock closes on the floor:
@@ -109,10 +111,17 @@ TEST(Impact, DensityBoundedAndNoLeak) {
   std::printf("[ impact ] particle-frames above the rim outside the basin: %zu\n", splashed);
 }
 
+TEST(Impact, DensityBoundedAndNoLeak) {
+  checkImpact("impact");
+}
+TEST(Impact, DivergenceFreeDensityBoundedAndNoLeak) {
+  checkImpact("impact_dfsph");
+}
+
 // --- Slip ramp (Fig. 7) -----------------------------------------------------------------
 
-TEST(SlipRamp, FrontTravelsFurtherWithMoreSlip) {
-  const SceneOutput out("slip_ramp");
+void checkSlipFronts(const std::string& scene) {
+  const SceneOutput out(scene);
   const Frame f0 = out.frame(0), f = out.frame(out.frames() - 1);
   const char* lanes[] = {"ramp_no_slip", "ramp_half_slip", "ramp_free_slip"};
   double front[3];
@@ -135,10 +144,17 @@ TEST(SlipRamp, FrontTravelsFurtherWithMoreSlip) {
   EXPECT_EQ(out.summary()["max_penetrating"].get<int>(), 0);
 }
 
+TEST(SlipRamp, FrontTravelsFurtherWithMoreSlip) {
+  checkSlipFronts("slip_ramp");
+}
+TEST(SlipRamp, DivergenceFreeFrontTravelsFurtherWithMoreSlip) {
+  checkSlipFronts("slip_ramp_dfsph");
+}
+
 // --- Buoyancy (Fig. 9) ------------------------------------------------------------------
 
-TEST(Buoyancy, LightFloatsMediumSinksSlowlyHeavySinksFast) {
-  const SceneOutput out("buoyancy");
+void checkCubes(const std::string& scene) {
+  const SceneOutput out(scene);
   const double light = out.body("light").pose.back().position.y();
   const double medium = out.body("medium").pose.back().position.y();
   const double heavy = out.body("heavy").pose.back().position.y();
@@ -160,10 +176,18 @@ TEST(Buoyancy, LightFloatsMediumSinksSlowlyHeavySinksFast) {
   EXPECT_EQ(out.summary()["max_penetrating"].get<int>(), 0);
 }
 
+TEST(Buoyancy, LightFloatsMediumSinksSlowlyHeavySinksFast) {
+  checkCubes("buoyancy");
+}
+TEST(Buoyancy, DivergenceFreeLightFloatsMediumSinksSlowlyHeavySinksFast) {
+  checkCubes("buoyancy_dfsph");
+}
+
 // --- Viscous drag (Fig. 10) -------------------------------------------------------------
 
-TEST(ViscousDrag, SphereSinksLessInTheMoreViscousFluid) {
-  const SceneOutput low("drag_low"), high("drag_high");
+/// `solver`: "" (the scenes as they are) or "_dfsph" (their divergence-free copies).
+void checkDrag(const std::string& solver) {
+  const SceneOutput low("drag_low" + solver), high("drag_high" + solver);
   const double y_low = low.body("sphere").pose.back().position.y();
   const double y_high = high.body("sphere").pose.back().position.y();
   std::printf("[ drag ] sphere height at t=%.2f s: viscosity 0.1 %.4f m, 3.0 %.4f m\n",
@@ -171,6 +195,13 @@ TEST(ViscousDrag, SphereSinksLessInTheMoreViscousFluid) {
   EXPECT_GT(y_high, y_low + 0.05);
   EXPECT_EQ(low.summary()["max_penetrating"].get<int>(), 0);
   EXPECT_EQ(high.summary()["max_penetrating"].get<int>(), 0);
+}
+
+TEST(ViscousDrag, SphereSinksLessInTheMoreViscousFluid) {
+  checkDrag("");
+}
+TEST(ViscousDrag, DivergenceFreeSphereSinksLessInTheMoreViscousFluid) {
+  checkDrag("_dfsph");
 }
 
 // --- Sinking ship (Fig. 5) and vessel (Fig. 6): single-layer walls ----------------------
@@ -240,8 +271,8 @@ TEST(SinkingShip, DivergenceFreeFillsAndSinksWithoutLeaks) {
   checkShipFillsThroughItsSlot("sinking_ship_dfsph");
 }
 
-TEST(Vessel, FloatsKeepingItsWaterWithoutLeaks) {
-  const SceneOutput out("vessel");
+void checkVesselKeepsItsWater(const std::string& scene) {
+  const SceneOutput out(scene);
   const test::BodyTrack& vessel = out.body("vessel");
   // The cavity in the vessel's frame: inner wall faces at |x|, |z| = 0.08 m, floor at
   // y = -0.05 m, rim at y = 0.07 m (relative to the vessel's scene position).
@@ -290,6 +321,13 @@ TEST(Vessel, FloatsKeepingItsWaterWithoutLeaks) {
   EXPECT_GT(at_start, 80u);
   EXPECT_GT(inside.size(), at_start / 4) << "fluid present inside the hull at the end";
   EXPECT_GT(vessel.pose.back().position.y(), 0.1) << "the vessel sank";
+}
+
+TEST(Vessel, FloatsKeepingItsWaterWithoutLeaks) {
+  checkVesselKeepsItsWater("vessel");
+}
+TEST(Vessel, DivergenceFreeFloatsKeepingItsWaterWithoutLeaks) {
+  checkVesselKeepsItsWater("vessel_dfsph");
 }
 
 // --- Penalty baseline vs direct forcing on the sinking ship (Sec. VI-A) ------------------

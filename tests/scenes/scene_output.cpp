@@ -25,11 +25,17 @@ std::string h5Path(const std::string& dir, const std::string& name) {
   return dir + "/" + name + ".h5";
 }
 
+/// scenes/<name>.json, or the copy tests/CMakeLists.txt made (WAKE_DFSPH_SCENES).
+std::string scenePath(const std::string& name) {
+  const std::string own = std::string(WAKE_SOURCE_DIR) + "/scenes/" + name + ".json";
+  if (std::ifstream(own)) return own;
+  return std::string(WAKE_DFSPH_SCENES) + "/" + name + ".json";
+}
+
 }  // namespace
 
 SceneOutput::SceneOutput(const std::string& name)
-    : dir_(std::string(WAKE_SCENE_RUNS) + "/" + name),
-      scene_(loadScene(std::string(WAKE_SOURCE_DIR) + "/scenes/" + name + ".json")) {
+    : dir_(std::string(WAKE_SCENE_RUNS) + "/" + name), scene_(loadScene(scenePath(name))) {
   std::ifstream summary(dir_ + "/summary.json");
   if (!summary)
     throw std::runtime_error(dir_ + "/summary.json is missing: run the scene_" + name +

@@ -29,7 +29,8 @@ struct BodyTrack {
 
 class SceneOutput {
  public:
-  /// Loads scenes/<name>.json and the run's output in WAKE_SCENE_RUNS/<name>/.
+  /// Loads scenes/<name>.json (or the divergence-free copy in WAKE_DFSPH_SCENES) and the
+  /// run's output in WAKE_SCENE_RUNS/<name>/.
   /// Fails the calling test (gtest assertions) when something is missing.
   explicit SceneOutput(const std::string& name);
   ~SceneOutput();
