@@ -16,9 +16,9 @@ wake=./build/io/wake
 
 # The time (s) of the still for each scene: the moment that shows what the scene is about.
 declare -A still=(
-  [stone_skipping]=0.2 [stone_skipping_local]=0.2 [stone_skipping_dfsph]=0.2 [impact]=0.1 [slip_ramp]=0.3
+  [stone_skipping]=0.2 [stone_skipping_local]=0.2 [impact]=0.1 [slip_ramp]=0.3
   [buoyancy]=1.2 [drag_low]=0.6 [drag_high]=0.6 [sinking_ship]=1.5
-  [sinking_ship_penalty]=1.5 [sinking_ship_dfsph]=1.5 [vessel]=1.0 [flotsam]=0.7 [dam_break]=0.5 [floating_box]=1.0
+  [sinking_ship_penalty]=1.5 [vessel]=1.0 [flotsam]=0.7 [dam_break]=0.5 [floating_box]=1.0
   [honey_and_water]=0.3 [squeeze]=0.2
 )
 # Camera per scene (default --view iso); --section cuts the fluid open so that bodies
@@ -26,7 +26,7 @@ declare -A still=(
 declare -A look=(
   [buoyancy]="--view front --section" [drag_low]="--view front --section"
   [drag_high]="--view front --section" [sinking_ship]="--view front --section"
-  [sinking_ship_penalty]="--view front --section" [sinking_ship_dfsph]="--view front --section" [vessel]="--view iso --section"
+  [sinking_ship_penalty]="--view front --section" [vessel]="--view iso --section"
   [floating_box]="--view iso --section" [slip_ramp]="--view top" [honey_and_water]="--view top" [impact]="--view front --section"
   [squeeze]="--view front --section"
 )

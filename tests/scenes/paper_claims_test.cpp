@@ -1,8 +1,7 @@
 // The paper's experiments (Sec. VI) as demo scenes: checks of what each one claims, on
 // the output that `wake run` wrote for scenes/<name>.json (tests/CMakeLists.txt
 // runs every scene first, as the test scene_<name>), and the same checks with the
-// divergence-free solver (<name>_dfsph: a scene file of its own, or a copy that
-// tests/CMakeLists.txt makes).
+// divergence-free solver (<name>_dfsph: the copy that tests/CMakeLists.txt makes).
 #include "scene_output.hpp"
 
 #include "demos/slip_front.hpp"
