@@ -124,6 +124,15 @@ int main(int argc, char** argv) {
                 100 * t.neighbors / total, 100 * t.density / total, 100 * t.forces / total,
                 100 * t.boundary / total, 100 * t.integration / total, sim.time(),
                 static_cast<unsigned long long>(stateHash(sim)));
+    // The phases per particle and step, and the rest of the step's wall time (the time
+    // step, the health check and the penetration count, the step's bookkeeping): what
+    // each costs and, between the thread counts, how each scales.
+    const double per = 1e9 / opt.steps / double(sim.fluidParticles());
+    std::printf(
+        "# ns/particle/step: neighbours %.1f, density %.1f, forces %.1f, boundary %.1f, "
+        "integration %.1f, rigid %.1f, rest of the step %.1f\n",
+        per * t.neighbors, per * t.density, per * t.forces, per * t.boundary, per * t.integration,
+        per * t.rigid, per * (wall - total));
     std::printf(
         "# neighbour lists sorted and built at %llu of %d steps, %llu of them with the skin "
         "(%.3g m)\n",

@@ -311,6 +311,11 @@ class Boundaries {
   /// +inf if none.
   double signedDistance(const Vec3& x, const BodyPlacement& at) const;
 
+  /// Whether the walls' sums take four samples at a time (AVX, where the CPU has it: the
+  /// default) or two: the same bits either way (Fluid::setWideLanes).
+  bool wideLanes() const { return wide_lanes_; }
+  void setWideLanes(bool on) { wide_lanes_ = on && hasWideLanes(); }
+
  private:
   /// Samples of one body in a grid: the static set (world space) or one moving body
   /// (body space). Sorted by cell.
@@ -461,6 +466,7 @@ class Boundaries {
   std::vector<MovingBody> moving_;
   bool finalized_ = false;
   bool any_shear_ = false;  ///< some body has slip < 1
+  bool wide_lanes_ = hasWideLanes();
   /// Particles per chunk of addWallTerms' reaction sums (fixed: determinism).
   static constexpr std::size_t kChunk = 2048;
   mutable std::vector<Wrench> chunk_reaction_;  ///< scratch: (chunks x bodies)

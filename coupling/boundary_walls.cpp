@@ -7,11 +7,249 @@
 
 #include <omp.h>
 
+#include "sph/lanes.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <iterator>
 #include <stdexcept>
 
 namespace wake {
+
+namespace {
+
+/// What the walls' sums of one particle read (Boundaries::wallSums).
+struct WallSumsIn {
+  const Vec3* position;
+  const Vec3* normal;
+  const double* volume;
+  const std::uint32_t* body;
+  const double* shear_factor;  ///< per body
+  const CubicSplineKernel* kernel;
+  double support_sq, rb, two_nu, nu;
+  Vec3 p, u, omega;
+};
+
+/// Whether a lane of a stored mask is set.
+inline bool laneSet(double mask) {
+  std::uint64_t bits;
+  std::memcpy(&bits, &mask, sizeof bits);
+  return bits != 0;
+}
+
+/// The walls' sums over the samples idx[0 .. count), several samples at a time: per
+/// sample the operations of Boundaries::wallSums' one sample at a time (the kernel without
+/// branches), its terms added to sum, shear and moment in the samples' order, so the same
+/// bits. Returns the sum.
+template <class L>
+inline double wallTerms(const WallSumsIn& in, const std::uint32_t* idx, std::size_t count,
+                        double sum, Vec3& shear, Vec3* moment, std::vector<std::uint32_t>* record) {
+  // The sums in registers (not through the references: a store and a load per term).
+  double sx = shear.x(), sy = shear.y(), sz = shear.z();
+  double mx = 0.0, my = 0.0, mz = 0.0;
+  if (moment) mx = moment->x(), my = moment->y(), mz = moment->z();
+  forEachNeighborGroup<L>(idx, 0, count, [&](auto lanes, const std::uint32_t* j, int used) {
+    using M = decltype(lanes);
+    constexpr int kW = M::kWidth;
+    const double* at[kW];
+    for (int t = 0; t < kW; ++t)
+      at[t] = in.position[j[t]].data();
+    M xk, yk, zk;
+    gather3Lanes(at, xk, yk, zk);
+    const M dx = M::all(in.p.x()) - xk, dy = M::all(in.p.y()) - yk, dz = M::all(in.p.z()) - zk;
+    const M d_sq = dx * dx + dy * dy + dz * dz;
+    const M r = sqrt(d_sq);
+    const M volume = gatherLanes(lanes, in.volume, j);
+    alignas(32) double far[kW], term[kW];
+    (d_sq >= M::all(in.support_sq)).store(far);
+    (volume * in.kernel->value(r)).store(term);
+    if (!(in.nu > 0.0)) {
+      for (int t = 0; t < used; ++t) {
+        if (laneSet(far[t])) continue;
+        if (record) record->push_back(j[t]);
+        sum += term[t];
+      }
+      return;
+    }
+    // Morris's ghost velocity: the sample lies rb behind the surface, the particle
+    // `beyond` in front of it; 1 + rb / beyond, at most 2.
+    alignas(32) double factor[kW];
+    for (int t = 0; t < kW; ++t)
+      factor[t] = in.shear_factor[in.body[j[t]]];
+    for (int t = 0; t < kW; ++t)
+      at[t] = in.normal[j[t]].data();
+    M nx, ny, nz;
+    gather3Lanes(at, nx, ny, nz);
+    const M rb = M::all(in.rb);
+    const M beyond = (dx * nx + dy * ny + dz * nz) - rb;
+    const M beta = select(rb < beyond, M::all(1.0) + rb / beyond, M::all(2.0));
+    const M w =
+        -M::load(factor) * M::all(in.two_nu) * volume * beta * in.kernel->derivativeOverR(r);
+    const M ox = M::all(in.omega.x()), oy = M::all(in.omega.y()), oz = M::all(in.omega.z());
+    const M rx = M::all(in.u.x()) - (oy * zk - oz * yk);
+    const M ry = M::all(in.u.y()) - (oz * xk - ox * zk);
+    const M rz = M::all(in.u.z()) - (ox * yk - oy * xk);
+    alignas(32) double s[3][kW], m[3][kW];
+    (w * rx).store(s[0]);
+    (w * ry).store(s[1]);
+    (w * rz).store(s[2]);
+    if (moment) {
+      (w * (yk * rz - zk * ry)).store(m[0]);
+      (w * (zk * rx - xk * rz)).store(m[1]);
+      (w * (xk * ry - yk * rx)).store(m[2]);
+    }
+    for (int t = 0; t < used; ++t) {
+      if (laneSet(far[t])) continue;
+      if (record) record->push_back(j[t]);
+      sum += term[t];
+      if (factor[t] <= 0.0) continue;
+      sx += s[0][t];
+      sy += s[1][t];
+      sz += s[2][t];
+      if (!moment) continue;
+      mx += m[0][t];
+      my += m[1][t];
+      mz += m[2][t];
+    }
+  });
+  shear = Vec3(sx, sy, sz);
+  if (moment) *moment = Vec3(mx, my, mz);
+  return sum;
+}
+
+/// Boundaries::pressureSum over the samples near[0 .. count) of one set, several at a time:
+/// per sample the operations of one at a time, its terms added in the samples' order (the
+/// same bits). position, volume, p_rho2: the set's.
+template <class L>
+inline Vec3 pressureTerms(const Vec3* position, const double* volume, const double* p_rho2,
+                          const CubicSplineKernel& kernel, double support_sq, const Vec3& p,
+                          double pr2, const std::uint32_t* near, std::size_t count, Vec3* moment) {
+  double sx = 0.0, sy = 0.0, sz = 0.0;
+  double mx = 0.0, my = 0.0, mz = 0.0;
+  if (moment) mx = moment->x(), my = moment->y(), mz = moment->z();
+  forEachNeighborGroup<L>(near, 0, count, [&](auto lanes, const std::uint32_t* j, int used) {
+    using M = decltype(lanes);
+    constexpr int kW = M::kWidth;
+    const double* at[kW];
+    for (int t = 0; t < kW; ++t)
+      at[t] = position[j[t]].data();
+    M xk, yk, zk;
+    gather3Lanes(at, xk, yk, zk);
+    const M dx = M::all(p.x()) - xk, dy = M::all(p.y()) - yk, dz = M::all(p.z()) - zk;
+    const M d_sq = dx * dx + dy * dy + dz * dz;
+    const M c = (M::all(pr2) + gatherLanes(lanes, p_rho2, j)) * gatherLanes(lanes, volume, j) *
+                kernel.derivativeOverR(sqrt(d_sq));
+    const M gx = c * dx, gy = c * dy, gz = c * dz;
+    alignas(32) double far[kW], g[3][kW], m[3][kW];
+    (d_sq >= M::all(support_sq)).store(far);
+    gx.store(g[0]);
+    gy.store(g[1]);
+    gz.store(g[2]);
+    if (moment) {
+      (yk * gz - zk * gy).store(m[0]);
+      (zk * gx - xk * gz).store(m[1]);
+      (xk * gy - yk * gx).store(m[2]);
+    }
+    for (int t = 0; t < used; ++t) {
+      if (laneSet(far[t])) continue;
+      sx += g[0][t];
+      sy += g[1][t];
+      sz += g[2][t];
+      if (!moment) continue;
+      mx += m[0][t];
+      my += m[1][t];
+      mz += m[2][t];
+    }
+  });
+  if (moment) *moment = Vec3(mx, my, mz);
+  return Vec3(sx, sy, sz);
+}
+
+Vec3 pressureTerms2(const Vec3* position, const double* volume, const double* p_rho2,
+                    const CubicSplineKernel& kernel, double support_sq, const Vec3& p, double pr2,
+                    const std::uint32_t* near, std::size_t count, Vec3* moment) {
+  return pressureTerms<Lanes2>(position, volume, p_rho2, kernel, support_sq, p, pr2, near, count,
+                               moment);
+}
+#if defined(WAKE_HAS_LANES4)
+WAKE_TARGET_AVX Vec3 pressureTerms4(const Vec3* position, const double* volume,
+                                    const double* p_rho2, const CubicSplineKernel& kernel,
+                                    double support_sq, const Vec3& p, double pr2,
+                                    const std::uint32_t* near, std::size_t count, Vec3* moment) {
+  return pressureTerms<Lanes4>(position, volume, p_rho2, kernel, support_sq, p, pr2, near, count,
+                               moment);
+}
+#endif
+
+/// The sums of one sample's pressure (Boundaries::samplePressure) over its particles
+/// particle[0 .. count), several at a time: sum W, sum P W and sum rho W (x_k - x_a), each
+/// particle's terms added in the list's order (the same bits as one at a time).
+struct SampleSums {
+  double w = 0.0, p = 0.0;
+  Vec3 rise = Vec3::Zero();
+};
+template <class L>
+inline SampleSums sampleTerms(const FluidState& st, const CubicSplineKernel& kernel,
+                              double support_sq, const Vec3& xk, const std::uint32_t* particle,
+                              std::size_t count) {
+  double w_sum = 0.0, p_sum = 0.0, rx = 0.0, ry = 0.0, rz = 0.0;
+  forEachNeighborGroup<L>(particle, 0, count, [&](auto lanes, const std::uint32_t* j, int used) {
+    using M = decltype(lanes);
+    constexpr int kW = M::kWidth;
+    const double* at[kW];
+    for (int t = 0; t < kW; ++t)
+      at[t] = st.position[j[t]].data();
+    M xa, ya, za;
+    gather3Lanes(at, xa, ya, za);
+    const M dx = M::all(xk.x()) - xa, dy = M::all(xk.y()) - ya, dz = M::all(xk.z()) - za;
+    const M d_sq = dx * dx + dy * dy + dz * dz;
+    const M w = kernel.value(sqrt(d_sq));
+    const M rho_w = gatherLanes(lanes, st.density.data(), j) * w;
+    alignas(32) double far[kW], ws[kW], pw[kW], r[3][kW];
+    (d_sq >= M::all(support_sq)).store(far);
+    w.store(ws);
+    (gatherLanes(lanes, st.pressure.data(), j) * w).store(pw);
+    (rho_w * dx).store(r[0]);
+    (rho_w * dy).store(r[1]);
+    (rho_w * dz).store(r[2]);
+    for (int t = 0; t < used; ++t) {
+      if (laneSet(far[t])) continue;
+      w_sum += ws[t];
+      p_sum += pw[t];
+      rx += r[0][t];
+      ry += r[1][t];
+      rz += r[2][t];
+    }
+  });
+  return {w_sum, p_sum, Vec3(rx, ry, rz)};
+}
+
+SampleSums sampleTerms2(const FluidState& st, const CubicSplineKernel& kernel, double support_sq,
+                        const Vec3& xk, const std::uint32_t* particle, std::size_t count) {
+  return sampleTerms<Lanes2>(st, kernel, support_sq, xk, particle, count);
+}
+#if defined(WAKE_HAS_LANES4)
+WAKE_TARGET_AVX SampleSums sampleTerms4(const FluidState& st, const CubicSplineKernel& kernel,
+                                        double support_sq, const Vec3& xk,
+                                        const std::uint32_t* particle, std::size_t count) {
+  return sampleTerms<Lanes4>(st, kernel, support_sq, xk, particle, count);
+}
+#endif
+
+double wallTerms2(const WallSumsIn& in, const std::uint32_t* idx, std::size_t count, double sum,
+                  Vec3& shear, Vec3* moment, std::vector<std::uint32_t>* record) {
+  return wallTerms<Lanes2>(in, idx, count, sum, shear, moment, record);
+}
+#if defined(WAKE_HAS_LANES4)
+WAKE_TARGET_AVX double wallTerms4(const WallSumsIn& in, const std::uint32_t* idx, std::size_t count,
+                                  double sum, Vec3& shear, Vec3* moment,
+                                  std::vector<std::uint32_t>* record) {
+  return wallTerms<Lanes4>(in, idx, count, sum, shear, moment, record);
+}
+#endif
+
+}  // namespace
 
 void Boundaries::addDensity(const Fluid& fluid, const BodyPlacement& at,
                             std::vector<double>& density) const {
@@ -95,55 +333,52 @@ double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, cons
                             const Vec3& omega, Vec3& shear, Vec3* moment,
                             std::vector<std::uint32_t>* record, const std::uint32_t* candidates,
                             std::size_t count) const {
-  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
-  const double rb = radius_;
-  const double two_nu = 2.0 * nu;
+  const double support = kernel_.supportRadius();
+  const WallSumsIn in{set.position.data(),
+                      set.normal.data(),
+                      set.volume.data(),
+                      set.body.data(),
+                      shear_factor_.data(),
+                      &kernel_,
+                      support * support,
+                      radius_,
+                      2.0 * nu,
+                      nu,
+                      p,
+                      u,
+                      omega};
+  auto terms = wallTerms2;
+#if defined(WAKE_HAS_LANES4)
+  if (wide_lanes_) terms = wallTerms4;
+#endif
+  if (candidates) return terms(in, candidates, count, 0.0, shear, moment, record);
+  // The cells the support's sphere reaches (the same samples pass, in the same order), a
+  // batch of samples at a time.
   double sum = 0.0;
-  // One sample's terms.
-  const auto one = [&](std::uint32_t k) {
-    const Vec3 d = p - set.position[k];
-    const double d_sq = d.squaredNorm();
-    if (d_sq >= support_sq) return;
-    if (record) record->push_back(k);
-    const double r = std::sqrt(d_sq);
-    sum += set.volume[k] * kernel_.value(r);
-    if (!(nu > 0.0)) return;
-    const double factor = shear_factor_[set.body[k]];
-    if (factor <= 0.0) return;
-    // Morris's ghost velocity: the sample lies rb behind the surface, the particle
-    // `beyond` in front of it; 1 + rb / beyond, at most 2 (a particle at or inside its
-    // radius).
-    const double beyond = d.dot(set.normal[k]) - rb;
-    const double beta = beyond > rb ? 1.0 + rb / beyond : 2.0;
-    const double w = -factor * two_nu * set.volume[k] * beta * kernel_.derivativeOverR(r);
-    const Vec3 rel = u - omega.cross(set.position[k]);
-    shear += w * rel;
-    if (moment) *moment += w * set.position[k].cross(rel);
-  };
-  if (candidates) {
-    for (std::size_t t = 0; t < count; ++t)
-      one(candidates[t]);
-    return sum;
-  }
-  // The cells the support's sphere reaches (the same samples pass, in the same order).
-  set.grid.forEachRangeInSphere(p, set.density_reach, kernel_.supportRadius(), false,
+  std::uint32_t batch[64];
+  std::size_t used = 0;
+  set.grid.forEachRangeInSphere(p, set.density_reach, support, false,
                                 [&](std::uint32_t lo, std::uint32_t hi) {
-                                  for (std::uint32_t k = lo; k < hi; ++k)
-                                    one(k);
+                                  for (std::uint32_t k = lo; k < hi; ++k) {
+                                    batch[used++] = k;
+                                    if (used < std::size(batch)) continue;
+                                    sum = terms(in, batch, used, sum, shear, moment, record);
+                                    used = 0;
+                                  }
                                 });
-  return sum;
+  return used ? terms(in, batch, used, sum, shear, moment, record) : sum;
 }
 
 Vec3 Boundaries::pressureSum(const SampleSet& set, const std::vector<double>& p_rho2, const Vec3& p,
                              double pr2, const std::uint32_t* near, std::size_t count,
                              Vec3* moment) const {
-  Vec3 sum = Vec3::Zero();
-  forEachSampleInSupport(set, p, near, count, [&](std::uint32_t k, const Vec3& d, double dwr) {
-    const Vec3 g = ((pr2 + p_rho2[k]) * set.volume[k] * dwr) * d;
-    sum += g;
-    if (moment) *moment += set.position[k].cross(g);
-  });
-  return sum;
+  auto terms = pressureTerms2;
+#if defined(WAKE_HAS_LANES4)
+  if (wide_lanes_) terms = pressureTerms4;
+#endif
+  const double support = kernel_.supportRadius();
+  return terms(set.position.data(), set.volume.data(), p_rho2.data(), kernel_, support * support, p,
+               pr2, near, count, moment);
 }
 
 void Boundaries::wallPass(const Fluid& fluid, const BodyPlacement& at, std::vector<double>& density,
@@ -364,24 +599,20 @@ void Boundaries::samplePressure(const Fluid& fluid, const SampleSet& set, const 
   if (st.size() == 0 || n == 0) return;
   const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
   const std::int64_t count = static_cast<std::int64_t>(n);
+  auto terms = sampleTerms2;
+#if defined(WAKE_HAS_LANES4)
+  if (wide_lanes_) terms = sampleTerms4;
+#endif
 #pragma omp parallel for schedule(static)
   for (std::int64_t k = 0; k < count; ++k) {
     if (offset[k] == offset[k + 1]) continue;  // no fluid near: no pressure
     const Vec3 xk = rotation * set.position[k] + origin;
-    double w_sum = 0.0, p_sum = 0.0;
-    Vec3 rise = Vec3::Zero();  // sum_a rho_a (x_k - x_a) W_ka
-    for (std::uint32_t t = offset[k]; t < offset[k + 1]; ++t) {
-      const std::uint32_t a = particle[t];
-      const Vec3 d = xk - st.position[a];
-      const double d_sq = d.squaredNorm();
-      if (d_sq >= support_sq) continue;
-      const double w = kernel_.value(std::sqrt(d_sq));
-      w_sum += w;
-      p_sum += st.pressure[a] * w;
-      rise += (st.density[a] * w) * d;
-    }
+    // sum_a W_ka, sum_a P_a W_ka and sum_a rho_a (x_k - x_a) W_ka
+    const SampleSums sums =
+        terms(st, kernel_, support_sq, xk, particle.data() + offset[k], offset[k + 1] - offset[k]);
+    const double w_sum = sums.w;
     if (w_sum == 0.0) continue;
-    const double p = std::max(0.0, (p_sum + gravity.dot(rise)) / w_sum);
+    const double p = std::max(0.0, (sums.p + gravity.dot(sums.rise)) / w_sum);
     if (p == 0.0) continue;
     const double rho = fluid_.densityAt(p);
     p_rho2[k] = p / (rho * rho);

@@ -297,21 +297,6 @@ bool Fluid::roundedWithinSkin(Vec3* rounded) const {
 
 namespace {
 
-/// Calls group(lanes, j, used) for the neighbours [k, e) of a list: L::kWidth at a time
-/// (lanes: an L), then the rest (fewer than L::kWidth) two at a time (lanes: a Lanes2). j
-/// holds the indices (an unused lane repeats the first), `used` how many are real.
-template <class L, class G>
-inline void forEachNeighborGroup(const std::uint32_t* nb, std::uint64_t k, std::uint64_t e,
-                                 G&& group) {
-  for (; k + L::kWidth <= e; k += L::kWidth)
-    group(L::all(0.0), nb + k, L::kWidth);
-  for (; k < e; k += 2) {
-    const bool both = k + 1 < e;
-    const std::uint32_t j[2] = {nb[k], nb[both ? k + 1 : k]};
-    group(Lanes2::all(0.0), j, both ? 2 : 1);
-  }
-}
-
 /// Summation density of the particles [i0, i1) (range r of the pair lists), several
 /// neighbours at a time (the kernel without branches). Each pair's kernel value is
 /// computed once, from its lower index, and added to both particles' sums; a pair with a

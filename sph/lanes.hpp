@@ -225,6 +225,7 @@ struct Lanes4 {
   static constexpr int kWidth = 4;
 
   WAKE_LANES4_FN static Lanes4 all(double a) { return {_mm256_set1_pd(a)}; }
+  WAKE_LANES4_FN static Lanes4 load(const double* p) { return {_mm256_loadu_pd(p)}; }
   WAKE_LANES4_FN void store(double* p) const { _mm256_storeu_pd(p, v); }
   // As Quad2's.
   WAKE_LANES4_FN static Lanes4 loadFloats(const float* p) {
@@ -326,5 +327,20 @@ inline bool hasWideLanes() {
 }
 
 #endif
+
+/// Calls group(lanes, j, used) for the entries [k, e) of an index list: L::kWidth at a time
+/// (lanes: an L), then the rest (fewer than L::kWidth) two at a time (lanes: a Lanes2). j
+/// holds the indices (an unused lane repeats the first), `used` how many are real.
+template <class L, class G>
+inline void forEachNeighborGroup(const std::uint32_t* nb, std::uint64_t k, std::uint64_t e,
+                                 G&& group) {
+  for (; k + L::kWidth <= e; k += L::kWidth)
+    group(L::all(0.0), nb + k, L::kWidth);
+  for (; k < e; k += 2) {
+    const bool both = k + 1 < e;
+    const std::uint32_t j[2] = {nb[k], nb[both ? k + 1 : k]};
+    group(Lanes2::all(0.0), j, both ? 2 : 1);
+  }
+}
 
 }  // namespace wake

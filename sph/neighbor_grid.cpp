@@ -167,15 +167,17 @@ std::size_t PairLists::rangeOf(std::size_t i) const {
 
 namespace {
 
-/// Calls f(j, i) for each pair j < i with i in [lo, hi) and j in [first, hi), in ascending
-/// j (and i for one j): the earlier neighbours of the points [lo, hi) from `first` on,
-/// read from the later lists.
+/// Calls f(j, i) for each pair j < i with i in [lo, hi) and j in [first, last), in
+/// ascending j (and i for one j): the earlier neighbours of the points [lo, hi) from
+/// `first` on (last = hi: all of them; last = lo: those before lo), read from the later
+/// lists.
 template <class F>
-void forEachEarlier(const PairLists& pairs, std::size_t first, std::size_t lo, std::size_t hi,
-                    F&& f) {
-  if (first >= hi) return;
+void forEachEarlier(const PairLists& pairs, std::size_t first, std::size_t last, std::size_t lo,
+                    std::size_t hi, F&& f) {
+  last = std::min(last, hi);
+  if (first >= last) return;
   std::size_t r = pairs.rangeOf(first);
-  for (std::size_t j = first; j < hi; ++j) {
+  for (std::size_t j = first; j < last; ++j) {
     while (pairs.range[r + 1] <= j)
       ++r;
     const std::uint32_t* later = pairs.later[r].data() + pairs.begin[j];
@@ -241,16 +243,14 @@ void buildBeforeLists(PairLists& out) {
     std::vector<std::uint32_t>& off = out.before_offset[r];
     std::vector<std::uint32_t>& list = out.before[r];
     off.assign(hi - lo + 1, 0);
-    forEachEarlier(out, first, lo, hi, [&](std::uint32_t j, std::uint32_t i) {
-      if (j < lo) ++off[i - lo + 1];
-    });
+    forEachEarlier(out, first, lo, lo, hi,
+                   [&](std::uint32_t, std::uint32_t i) { ++off[i - lo + 1]; });
     for (std::size_t q = 1; q < off.size(); ++q)
       off[q] += off[q - 1];
     list.resize(off.back());
     // off[q] serves as point q's cursor, then is restored.
-    forEachEarlier(out, first, lo, hi, [&](std::uint32_t j, std::uint32_t i) {
-      if (j < lo) list[off[i - lo]++] = j;
-    });
+    forEachEarlier(out, first, lo, lo, hi,
+                   [&](std::uint32_t j, std::uint32_t i) { list[off[i - lo]++] = j; });
     for (std::size_t q = off.size() - 1; q > 0; --q)
       off[q] = off[q - 1];
     off[0] = 0;
@@ -397,7 +397,7 @@ void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points,
     const std::size_t lo = pairs.range[r], hi = pairs.range[r + 1];
     for (std::size_t i = lo; i < hi; ++i)
       out.lower_count[i] = 0;
-    forEachEarlier(pairs, first_of(lo), lo, hi,
+    forEachEarlier(pairs, first_of(lo), hi, lo, hi,
                    [&](std::uint32_t, std::uint32_t i) { ++out.lower_count[i]; });
     for (std::size_t i = lo; i < hi; ++i)
       out.offset[i + 1] = out.lower_count[i] + pairs.count[i];
@@ -412,7 +412,7 @@ void buildNeighborList(const UniformGrid& grid, const std::vector<Vec3>& points,
     const std::size_t lo = pairs.range[r], hi = pairs.range[r + 1];
     for (std::size_t i = lo; i < hi; ++i)
       out.lower_count[i] = 0;
-    forEachEarlier(pairs, first_of(lo), lo, hi, [&](std::uint32_t j, std::uint32_t i) {
+    forEachEarlier(pairs, first_of(lo), hi, lo, hi, [&](std::uint32_t j, std::uint32_t i) {
       index[out.offset[i] + out.lower_count[i]++] = j;
     });
     for (std::size_t i = lo; i < hi; ++i)

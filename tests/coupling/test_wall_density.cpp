@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <cstring>
 #include <random>
 
 using namespace wake;
@@ -148,4 +149,207 @@ TEST(WallDensity, StaticCandidatesOfTheLastBuildGiveTheSearchsBits) {
     EXPECT_LE(builds, 20u);
   }
   omp_set_num_threads(threads_before);
+}
+
+namespace {
+
+/// Static walls (a no-slip tank and a half-slip block) and a two-way box turning as it
+/// moves, with a viscous fluid at random around them at rest density and random speeds:
+/// the walls' three passes (density share and shear, the samples' pressure, the walls'
+/// pressure force) of one step.
+struct WallPassScene {
+  static FluidParams viscous() {
+    FluidParams p;
+    p.particle_radius = 0.01;
+    p.speed_of_sound = 20.0;
+    p.kinematic_viscosity = 1e-3;
+    return p;
+  }
+  FluidParams params = viscous();
+  Aabb domain{Vec3(-0.1, -0.1, -0.1), Vec3(0.5, 0.4, 0.3)};
+  Boundaries walls{params, domain};
+  Fluid fluid{params, domain};
+  BodyPlacement at;
+
+  explicit WallPassScene(bool moving) {
+    BodySettings tank;
+    tank.name = "tank";
+    tank.shape = makeTank(Vec3::Zero(), Vec3(0.4, 0.3, 0.2), 0.04);
+    walls.addBody(tank);
+    BodySettings block;
+    block.name = "block";
+    block.slip = 0.5;
+    block.shape = makeBox(Vec3(0.05, 0.04, 0.06));
+    block.pose = Pose{Vec3(0.1, 0.04, 0.1), Quat(Eigen::AngleAxisd(0.3, Vec3::UnitY()))};
+    walls.addBody(block);
+    if (moving) {
+      BodySettings box;
+      box.name = "box";
+      box.kind = BodyKind::Dynamic;
+      box.shape = makeBox(Vec3(0.04, 0.03, 0.05));
+      box.pose.position = Vec3(0.28, 0.12, 0.1);
+      walls.addBody(box);
+    }
+    walls.finalize();
+    std::vector<RigidState> states(walls.bodyCount());
+    for (std::size_t b = 0; b < states.size(); ++b)
+      states[b].pose = walls.body(b).pose;
+    if (moving) {
+      states[2].pose.orientation = Quat(Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()));
+      states[2].linear_velocity = Vec3(0.3, -0.2, 0.1);
+      states[2].angular_velocity = Vec3(1.0, -2.0, 0.5);
+    }
+    walls.place(states, at);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(0.0, 1.0), v(-1.0, 1.0);
+    for (std::uint32_t id = 0; fluid.state().size() < 4000; ++id) {
+      const Vec3 x(0.4 * u(rng), 0.25 * u(rng), 0.2 * u(rng));
+      if (walls.signedDistance(x, at) < params.particle_radius) continue;
+      fluid.state().append(x, Vec3(v(rng), v(rng), v(rng)), id, params.kinematic_viscosity);
+    }
+    fluid.updateNeighbors();
+  }
+
+  struct Result {
+    std::vector<double> density;
+    std::vector<Vec3> shear, pressure_force;
+    std::vector<Wrench> reaction, pressure_reaction;
+    SamplePressure samples;
+  };
+  Result run() {
+    Result r;
+    fluid.computeFluidDensity();
+    r.density = fluid.state().density;
+    WallPairs pairs;
+    walls.addWallTerms(fluid, at, r.density, r.shear, r.reaction, pairs);
+    fluid.state().density = r.density;
+    fluid.computePressure();
+    walls.computeSamplePressure(fluid, at, Vec3(0, -9.81, 0), pairs, r.samples);
+    r.pressure_reaction.assign(walls.bodyCount(), Wrench{});
+    walls.addWallPressure(fluid, at, pairs, r.samples, r.pressure_force, r.pressure_reaction);
+    return r;
+  }
+};
+
+bool sameBits(double a, double b) {
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
+bool sameBits(const Vec3& a, const Vec3& b) {
+  return sameBits(a.x(), b.x()) && sameBits(a.y(), b.y()) && sameBits(a.z(), b.z());
+}
+
+}  // namespace
+
+TEST(WallPasses, SeveralSamplesAtOnceGiveTheBitsOfOneSampleAtATime) {
+  // Static walls: each pass against its sum written out one sample at a time, in the
+  // samples' order (the static set is in cell order: worldSamples' first samples), on two
+  // and, where the CPU has AVX, four lanes.
+  for (bool wide : {false, true}) {
+    WallPassScene scene(false);
+    scene.walls.setWideLanes(wide);
+    ASSERT_EQ(scene.walls.wideLanes(), wide && hasWideLanes());
+    const FluidParams& f = scene.params;
+    const FluidState& st = scene.fluid.state();
+    const std::vector<double> fluid_density = (scene.fluid.computeFluidDensity(), st.density);
+    const WallPassScene::Result got = scene.run();
+    std::vector<Vec3> pos, nrm;
+    std::vector<double> vol;
+    std::vector<std::uint32_t> body;
+    scene.walls.worldSamples(scene.at, pos, nrm, vol, body);
+    const CubicSplineKernel kernel(f.smoothingLength());
+    const double support_sq = kernel.supportRadius() * kernel.supportRadius();
+    const double rb = f.particle_radius, two_nu = 2.0 * f.kinematic_viscosity;
+    // The walls' shear factor (1 - slip) / (1 + 3 slip): the tank's (no slip), the block's.
+    const double factor[2] = {1.0, (1.0 - 0.5) / (1.0 + 3.0 * 0.5)};
+    const std::size_t n = st.size();
+    std::vector<std::vector<std::uint32_t>> near(pos.size());
+    std::size_t walled = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      double sum = 0.0;
+      Vec3 s = Vec3::Zero();
+      for (std::uint32_t k = 0; k < pos.size(); ++k) {
+        const Vec3 d = st.position[i] - pos[k];
+        const double d_sq = d.squaredNorm();
+        if (d_sq >= support_sq) continue;
+        near[k].push_back(static_cast<std::uint32_t>(i));
+        const double r = std::sqrt(d_sq);
+        sum += vol[k] * kernel.value(r);
+        const double beyond = d.dot(nrm[k]) - rb;
+        const double beta = beyond > rb ? 1.0 + rb / beyond : 2.0;
+        const double w = -factor[body[k]] * two_nu * vol[k] * beta * kernel.derivativeOverR(r);
+        s += w * (st.velocity[i] - Vec3::Zero().cross(pos[k]));
+      }
+      walled += sum > 0.0;
+      ASSERT_TRUE(sameBits(got.density[i], fluid_density[i] + f.rest_density * sum)) << i;
+      ASSERT_TRUE(sameBits(got.shear[i], Vec3(Vec3::Zero() - s))) << i;
+    }
+    EXPECT_GT(walled, n / 4);
+    // The samples' pressure: sum_a W, sum_a P_a W, sum_a rho_a (x_k - x_a) W, particles
+    // in order.
+    std::size_t pressed = 0;
+    for (std::size_t k = 0; k < pos.size(); ++k) {
+      double w_sum = 0.0, p_sum = 0.0;
+      Vec3 rise = Vec3::Zero();
+      for (const std::uint32_t a : near[k]) {
+        const Vec3 d = pos[k] - st.position[a];
+        const double w = kernel.value(std::sqrt(d.squaredNorm()));
+        w_sum += w;
+        p_sum += st.pressure[a] * w;
+        rise += (st.density[a] * w) * d;
+      }
+      double want = 0.0;
+      const double p =
+          w_sum > 0.0 ? std::max(0.0, (p_sum + Vec3(0, -9.81, 0).dot(rise)) / w_sum) : 0.0;
+      if (p > 0.0) {
+        const double rho = f.densityAt(p);
+        want = p / (rho * rho);
+        ++pressed;
+      }
+      ASSERT_TRUE(sameBits(got.samples.p_rho2[0][k], want)) << "sample " << k;
+    }
+    EXPECT_GT(pressed, 100u);
+    // The walls' pressure force.
+    for (std::size_t i = 0; i < n; ++i) {
+      const double pr2 = st.pressure[i] / (st.density[i] * st.density[i]);
+      Vec3 sum = Vec3::Zero();
+      for (std::uint32_t k = 0; k < pos.size(); ++k) {
+        const Vec3 d = st.position[i] - pos[k];
+        const double d_sq = d.squaredNorm();
+        if (d_sq >= support_sq) continue;
+        const double dwr = kernel.derivativeOverR(std::sqrt(d_sq));
+        sum += ((pr2 + got.samples.p_rho2[0][k]) * vol[k] * dwr) * d;
+      }
+      const Vec3 want = Vec3::Zero() + f.rest_density * Vec3(Vec3::Zero() - sum);
+      ASSERT_TRUE(sameBits(got.pressure_force[i], want)) << i;
+    }
+  }
+}
+
+TEST(WallPasses, TwoAndFourLanesGiveTheSameBitsWithAMovingBody) {
+  // A two-way box turning as it moves among static walls: the three passes, their sums
+  // per particle and sample and the box's reactions, on two lanes and on four.
+  if (!hasWideLanes()) GTEST_SKIP() << "no AVX: one way only";
+  WallPassScene two(true), four(true);
+  two.walls.setWideLanes(false);
+  four.walls.setWideLanes(true);
+  const WallPassScene::Result a = two.run(), b = four.run();
+  ASSERT_EQ(a.density.size(), b.density.size());
+  for (std::size_t i = 0; i < a.density.size(); ++i) {
+    ASSERT_TRUE(sameBits(a.density[i], b.density[i])) << i;
+    ASSERT_TRUE(sameBits(a.shear[i], b.shear[i])) << i;
+    ASSERT_TRUE(sameBits(a.pressure_force[i], b.pressure_force[i])) << i;
+  }
+  ASSERT_EQ(a.samples.p_rho2.size(), 2u);
+  for (std::size_t s = 0; s < 2; ++s) {
+    ASSERT_EQ(a.samples.p_rho2[s].size(), b.samples.p_rho2[s].size());
+    for (std::size_t k = 0; k < a.samples.p_rho2[s].size(); ++k)
+      ASSERT_TRUE(sameBits(a.samples.p_rho2[s][k], b.samples.p_rho2[s][k])) << s << " " << k;
+  }
+  const Wrench& ra = a.reaction[2];
+  const Wrench& rb = b.reaction[2];
+  EXPECT_GT(ra.force.norm(), 0.0);  // the box is sheared and pressed
+  EXPECT_GT(a.pressure_reaction[2].torque.norm(), 0.0);
+  EXPECT_TRUE(sameBits(ra.force, rb.force) && sameBits(ra.torque, rb.torque));
+  EXPECT_TRUE(sameBits(a.pressure_reaction[2].force, b.pressure_reaction[2].force) &&
+              sameBits(a.pressure_reaction[2].torque, b.pressure_reaction[2].torque));
 }
