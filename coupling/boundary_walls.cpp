@@ -38,6 +38,26 @@ inline bool laneSet(double mask) {
   return bits != 0;
 }
 
+/// The positions of a group of samples (or particles) j, several at a time, and p's
+/// offsets from them.
+template <class M>
+struct GroupOffsets {
+  M x, y, z, dx, dy, dz, d_sq;
+};
+template <class M>
+inline GroupOffsets<M> offsetsFrom(const Vec3& p, const Vec3* position, const std::uint32_t* j) {
+  const double* at[M::kWidth];
+  for (int t = 0; t < M::kWidth; ++t)
+    at[t] = position[j[t]].data();
+  GroupOffsets<M> o;
+  gather3Lanes(at, o.x, o.y, o.z);
+  o.dx = M::all(p.x()) - o.x;
+  o.dy = M::all(p.y()) - o.y;
+  o.dz = M::all(p.z()) - o.z;
+  o.d_sq = o.dx * o.dx + o.dy * o.dy + o.dz * o.dz;
+  return o;
+}
+
 /// The walls' sums over the samples idx[0 .. count), several samples at a time: per
 /// sample the operations of Boundaries::wallSums' one sample at a time (the kernel without
 /// branches), its terms added to sum, shear and moment in the samples' order, so the same
@@ -52,13 +72,8 @@ inline double wallTerms(const WallSumsIn& in, const std::uint32_t* idx, std::siz
   forEachNeighborGroup<L>(idx, 0, count, [&](auto lanes, const std::uint32_t* j, int used) {
     using M = decltype(lanes);
     constexpr int kW = M::kWidth;
-    const double* at[kW];
-    for (int t = 0; t < kW; ++t)
-      at[t] = in.position[j[t]].data();
-    M xk, yk, zk;
-    gather3Lanes(at, xk, yk, zk);
-    const M dx = M::all(in.p.x()) - xk, dy = M::all(in.p.y()) - yk, dz = M::all(in.p.z()) - zk;
-    const M d_sq = dx * dx + dy * dy + dz * dz;
+    const GroupOffsets<M> o = offsetsFrom<M>(in.p, in.position, j);
+    const M &xk = o.x, &yk = o.y, &zk = o.z, &dx = o.dx, &dy = o.dy, &dz = o.dz, &d_sq = o.d_sq;
     const M r = sqrt(d_sq);
     const M volume = gatherLanes(lanes, in.volume, j);
     alignas(32) double far[kW], term[kW];
@@ -77,6 +92,7 @@ inline double wallTerms(const WallSumsIn& in, const std::uint32_t* idx, std::siz
     alignas(32) double factor[kW];
     for (int t = 0; t < kW; ++t)
       factor[t] = in.shear_factor[in.body[j[t]]];
+    const double* at[kW];
     for (int t = 0; t < kW; ++t)
       at[t] = in.normal[j[t]].data();
     M nx, ny, nz;
@@ -131,13 +147,8 @@ inline Vec3 pressureTerms(const Vec3* position, const double* volume, const doub
   forEachNeighborGroup<L>(near, 0, count, [&](auto lanes, const std::uint32_t* j, int used) {
     using M = decltype(lanes);
     constexpr int kW = M::kWidth;
-    const double* at[kW];
-    for (int t = 0; t < kW; ++t)
-      at[t] = position[j[t]].data();
-    M xk, yk, zk;
-    gather3Lanes(at, xk, yk, zk);
-    const M dx = M::all(p.x()) - xk, dy = M::all(p.y()) - yk, dz = M::all(p.z()) - zk;
-    const M d_sq = dx * dx + dy * dy + dz * dz;
+    const GroupOffsets<M> o = offsetsFrom<M>(p, position, j);
+    const M &xk = o.x, &yk = o.y, &zk = o.z, &dx = o.dx, &dy = o.dy, &dz = o.dz, &d_sq = o.d_sq;
     const M c = (M::all(pr2) + gatherLanes(lanes, p_rho2, j)) * gatherLanes(lanes, volume, j) *
                 kernel.derivativeOverR(sqrt(d_sq));
     const M gx = c * dx, gy = c * dy, gz = c * dz;
@@ -197,13 +208,8 @@ inline SampleSums sampleTerms(const FluidState& st, const CubicSplineKernel& ker
   forEachNeighborGroup<L>(particle, 0, count, [&](auto lanes, const std::uint32_t* j, int used) {
     using M = decltype(lanes);
     constexpr int kW = M::kWidth;
-    const double* at[kW];
-    for (int t = 0; t < kW; ++t)
-      at[t] = st.position[j[t]].data();
-    M xa, ya, za;
-    gather3Lanes(at, xa, ya, za);
-    const M dx = M::all(xk.x()) - xa, dy = M::all(xk.y()) - ya, dz = M::all(xk.z()) - za;
-    const M d_sq = dx * dx + dy * dy + dz * dz;
+    const GroupOffsets<M> o = offsetsFrom<M>(xk, st.position.data(), j);
+    const M &dx = o.dx, &dy = o.dy, &dz = o.dz, &d_sq = o.d_sq;
     const M w = kernel.value(sqrt(d_sq));
     const M rho_w = gatherLanes(lanes, st.density.data(), j) * w;
     alignas(32) double far[kW], ws[kW], pw[kW], r[3][kW];
