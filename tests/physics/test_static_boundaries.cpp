@@ -103,7 +103,11 @@ TEST_P(Solvers, HydrostaticPressureGrowsLinearlyWithDepthAndFluidRests) {
       layers[layer].second += 1;
     }
   }
-  // Within 5 % for both solvers (measured: WCSPH 1-2 %, DFSPH up to 4 %).
+  // Within 5 % for both solvers. Measured with this column at r = 4 / 5 / 6 mm: WCSPH
+  // +0.9..+2.5 / +0.3..+1.8 / -1.7..+2.2 %, DFSPH +0.7..+2.3 / +0.7..+3.0 / -2.8..+1.0 %
+  // (+1.7..+2.5 / -0.9..+1.4 / +2.4..+4.2 % with a density tolerance of 1e-4): the error
+  // is that of the SPH pressure gradient on the arrangement the particles settle in, not of
+  // the solve, and neither solver holds 2 % at every resolution.
   const double tolerance = 0.05;
   int checked = 0;
   for (const auto& [layer, acc] : layers) {
