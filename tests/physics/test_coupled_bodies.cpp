@@ -202,8 +202,9 @@ TEST(BuoyancyDfsph, PlacedBoxFloatsAtTheArchimedesDraft) {
 /// Dropped from 1 cm (2 s each, 11 s on two threads). Measured: drafts -1.9 / -1.5 % at
 /// density ratios 0.5 / 0.7 (-2.4 / -1.7 % while the samples above a particle took their
 /// share of the last step's pressure instead of its running mean; sph/dfsph.hpp).
-void checkDroppedDfsph(double ratio) {
-  const Floating f = floatBox(ratio, CouplingMethod::Local, 2.0, 0.0, false, FluidSolver::Dfsph);
+void checkDroppedDfsph(double ratio, double radius = kRadius) {
+  const Floating f =
+      floatBox(ratio, CouplingMethod::Local, 2.0, 0.0, false, FluidSolver::Dfsph, radius);
   EXPECT_NEAR(f.draft, ratio * 0.10, 0.03 * ratio * 0.10);
   EXPECT_LT(f.tilt, 0.1);
   EXPECT_EQ(f.max_penetrating, 0u);
@@ -224,17 +225,12 @@ INSTANTIATE_TEST_SUITE_P(Ratios, BuoyancyDfsphDropped, ::testing::Values(0.5, 0.
 /// particle spacings at the suite's r = 5 mm, where the divergence-free solver floats it
 /// 1.2 mm (-4.1 %) too high. That is a gap of about an eighth of a spacing between the
 /// box's bottom and the fluid that carries it, the same in millimetres at every density
-/// ratio (1.0 / 1.3 mm at 0.5 / 0.7: -2.0 / -1.8 %, the checks above), and it shrinks with
+/// ratio (1.0 / 1.1 mm at 0.5 / 0.7: -1.9 / -1.5 %, the checks above), and it shrinks with
 /// the spacing: 0.5 mm (-1.6 %) at r = 3.33 mm and 0.3 mm (-0.9 %) at r = 2.5 mm (WCSPH:
 /// -2.5 % at 5 mm). So this box is checked at r = 3.33 mm, where its draft is 4.5
 /// spacings (labelled slow: 29,000 particles over 2 s).
 TEST(BuoyancyDfsph, DroppedLightBoxFloatsAtTheArchimedesDraftAtTwoThirdsTheSpacing) {
-  const double ratio = 0.3;
-  const Floating f = floatBox(ratio, CouplingMethod::Local, 2.0, 0.0, false, FluidSolver::Dfsph,
-                              kRadius * 2.0 / 3.0);
-  EXPECT_NEAR(f.draft, ratio * 0.10, 0.03 * ratio * 0.10);
-  EXPECT_LT(f.tilt, 0.1);
-  EXPECT_EQ(f.max_penetrating, 0u);
+  checkDroppedDfsph(0.3, kRadius * 2.0 / 3.0);
 }
 
 /// Dropped onto the fluid, a box denser than the fluid sinks until it rests on the last
