@@ -8,12 +8,14 @@
 // how many times less wall time the divergence-free solver needed.
 //
 //   wake_bench_solvers [--scene FILE] [--particles N] [--sim-time T] [--threads K]
-//                      [--dfsph-max-dt DT] [--dfsph-max-error E] [--solvers wcsph,dfsph]
-//                      [--skin F]
+//                      [--dfsph-max-dt DT] [--dfsph-cfl L] [--dfsph-max-error E]
+//                      [--solvers wcsph,dfsph] [--skin F]
 //
 // Defaults: bench/spheric2.json at its own resolution (~105k particles), 1 simulated
-// second, 1 thread, DFSPH's max_dt 1 ms and the scene's fluid.dfsph.max_density_error
-// (--dfsph-max-error replaces it).
+// second, 1 thread; the weakly compressible run as the scene has it (its time.cfl and
+// max_dt), the divergence-free one with time.cfl 0.6 (the largest it takes: dt <= 0.6 H /
+// |v|max), max_dt 1 ms and the scene's fluid.dfsph.max_density_error (--dfsph-cfl,
+// --dfsph-max-dt and --dfsph-max-error replace them).
 #include "bullet_bridge/scene_world.hpp"
 #include "coupling/simulation.hpp"
 #include "io/process.hpp"
@@ -40,6 +42,7 @@ struct Options {
   double sim_time = 1.0;
   int threads = 1;
   double dfsph_max_dt = 1e-3;
+  double dfsph_cfl = 0.6;       ///< time.cfl of the DFSPH run
   double dfsph_max_error = -1;  ///< > 0: fluid.dfsph.max_density_error for the DFSPH run
   std::vector<std::string> solvers = {"wcsph", "dfsph"};
   double skin = -1;  ///< --skin F: the neighbour lists' skin, F x the support (< 0: automatic)
@@ -48,7 +51,8 @@ struct Options {
 [[noreturn]] void usage(const char* program, const std::string& msg) {
   std::fprintf(stderr,
                "error: %s\nusage: %s [--scene FILE] [--particles N] [--sim-time T] [--threads K]"
-               " [--dfsph-max-dt DT] [--dfsph-max-error E] [--solvers wcsph,dfsph] [--skin F]\n",
+               " [--dfsph-max-dt DT] [--dfsph-cfl L] [--dfsph-max-error E] [--solvers wcsph,dfsph]"
+               " [--skin F]\n",
                msg.c_str(), program);
   std::exit(2);
 }
@@ -71,7 +75,11 @@ Options parse(int argc, char** argv) {
       o.threads = std::stoi(value("--threads"));
     else if (a == "--dfsph-max-dt")
       o.dfsph_max_dt = std::stod(value("--dfsph-max-dt"));
-    else if (a == "--dfsph-max-error") {
+    else if (a == "--dfsph-cfl") {
+      o.dfsph_cfl = std::stod(value("--dfsph-cfl"));
+      if (!(o.dfsph_cfl > 0 && o.dfsph_cfl <= 0.6))
+        usage(argv[0], "--dfsph-cfl must be in (0, 0.6]");
+    } else if (a == "--dfsph-max-error") {
       o.dfsph_max_error = std::stod(value("--dfsph-max-error"));
       if (!(o.dfsph_max_error > 0 && o.dfsph_max_error <= 0.1))
         usage(argv[0], "--dfsph-max-error must be in (0, 0.1]");
@@ -121,7 +129,7 @@ int main(int argc, char** argv) {
     if (dfsph) {
       scene.sim.solver = FluidSolver::Dfsph;
       scene.sim.max_dt = opt.dfsph_max_dt;
-      scene.sim.cfl = std::min(scene.sim.cfl, 0.6);
+      scene.sim.cfl = opt.dfsph_cfl;
       if (opt.dfsph_max_error > 0) scene.sim.dfsph.max_density_error = opt.dfsph_max_error;
     }
     if (opt.skin >= 0) scene.sim.neighbor_skin = opt.skin * scene.sim.fluid.supportRadius();

@@ -22,7 +22,6 @@ double incompressibleTimeStep(const FluidParams& f, double cfl, double max_dt, d
   double dt = max_dt;
   if (v_max > 0) dt = std::min(dt, cfl * h / v_max);
   if (a_max > 0) dt = std::min(dt, 0.25 * std::sqrt(h / a_max));
-  if (v_max > 0) dt = std::min(dt, f.particle_radius / v_max);
   const double nu = nu_max + f.viscosity * h * f.speed_of_sound / 10.0;
   if (nu > 0) dt = std::min(dt, 0.125 * h * h / nu);
   return dt;

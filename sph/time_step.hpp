@@ -17,8 +17,11 @@ namespace wake {
 double stableTimeStep(const FluidParams& fluid, double cfl, double max_dt, double v_max,
                       double a_max, double nu_max);
 
-/// The incompressible solver's limits: stableTimeStep without the speed of sound,
-///   min(max_dt, cfl H / v_max, 0.25 sqrt(H / a_max), r / v_max, 0.125 H^2 / nu),
+/// The incompressible solver's limits: stableTimeStep without the speed of sound and
+/// without r / v_max (the flow's CFL condition alone bounds the distance a particle moves,
+/// cfl H <= 0.6 H: r / v_max, half of H at the default smoothing ratio, would cap
+/// time.cfl at 0.5 whatever the scene asks),
+///   min(max_dt, cfl H / v_max, 0.25 sqrt(H / a_max), 0.125 H^2 / nu),
 /// nu = nu_max + alpha H c / 10, the artificial viscosity's share (Monaghan 2005) when the
 /// fluid has one (alpha = fluid.viscosity, c = fluid.speed_of_sound scales it).
 double incompressibleTimeStep(const FluidParams& fluid, double cfl, double max_dt, double v_max,
