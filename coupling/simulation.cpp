@@ -398,7 +398,12 @@ void Simulation::findNeighbors() {
 void Simulation::computeFluidForces() {
   FluidState& st = fluid_->state();
   auto t0 = Clock::now();
-  fluid_->computeFluidDensity();
+  // The divergence-free solver sums the densities as it lists each pair's kernel gradient
+  // (the same bits, one pass over the pairs).
+  if (dfsph_)
+    dfsph_->prepareLists(*fluid_);
+  else
+    fluid_->computeFluidDensity();
   timings_.density += secondsSince(t0);
   t0 = Clock::now();
   // The walls' density share and viscous shear (their part of the fluid's sums). Their

@@ -29,13 +29,15 @@ int latticeNeighbors(const FluidParams& f) {
 }
 
 /// g_ab = m grad_a W(x_a - x_b) of a's neighbours nb[0 .. count) into g[3 t + c], several
-/// at a time in L (Lanes2, Lanes4: per lane the scalar operations, the same bits).
+/// at a time in L (Lanes2, Lanes4: per lane the scalar operations, the same bits); where w
+/// is not null, W(|x_a - x_b|) into w[t] (the distance as Fluid::computeFluidDensity
+/// forms it: the same bits).
 template <class L>
 inline void rowGradients(const Vec3& xa, const Vec3* x, const std::uint32_t* nb,
                          std::uint32_t count, const CubicSplineKernel& kernel, double mass,
-                         double* g) {
+                         double* g, double* w) {
   constexpr int W = L::kWidth;
-  alignas(32) double out[3][W];
+  alignas(32) double out[4][W];
   for (std::uint32_t k = 0; k < count; k += W) {
     const double* p[W];
     for (int t = 0; t < W; ++t)
@@ -43,33 +45,47 @@ inline void rowGradients(const Vec3& xa, const Vec3* x, const std::uint32_t* nb,
     L xb, yb, zb;
     gather3Lanes(p, xb, yb, zb);
     const L dx = L::all(xa.x()) - xb, dy = L::all(xa.y()) - yb, dz = L::all(xa.z()) - zb;
-    const L f = L::all(mass) * kernel.derivativeOverR(sqrt(dx * dx + dy * dy + dz * dz));
+    const L r = sqrt(dx * dx + dy * dy + dz * dz);
+    const L f = L::all(mass) * kernel.derivativeOverR(r);
     (f * dx).store(out[0]);
     (f * dy).store(out[1]);
     (f * dz).store(out[2]);
-    for (int t = 0; t < W && k + t < count; ++t)
+    if (w) kernel.value(r).store(out[3]);
+    for (int t = 0; t < W && k + t < count; ++t) {
       for (int c = 0; c < 3; ++c)
         g[3 * (k + t) + c] = out[c][t];
+      if (w) w[k + t] = out[3][t];
+    }
   }
 }
 
 /// A row's sums (padded to groups of four; the padding adds zeros) in four partial sums of
-/// Q (Quad2, Lanes4: the same bits): sum_b g_ab, sum_b |g_ab|^2 and, with `near`, sum_b
-/// |g_ab|^2 (x_b - x_a).
+/// Q (Quad2, Lanes4: the same bits): sum_b g_ab and sum_b |g_ab|^2.
 template <class Q>
-inline void rowSums(const std::uint32_t* index, const float* gx, const float* gy, const float* gz,
-                    std::uint32_t k, std::uint32_t e, const Vec3* x, std::size_t a, bool near,
-                    GradientSums& out) {
-  Q sx = Q::all(0.0), sy = sx, sz = sx, sq = sx, ox = sx, oy = sx, oz = sx;
+inline void rowSums(const float* gx, const float* gy, const float* gz, std::uint32_t k,
+                    std::uint32_t e, GradientSums& out) {
+  Q sx = Q::all(0.0), sy = sx, sz = sx, sq = sx;
+  for (std::uint32_t t = k; t < e; t += 4) {
+    const Q u = Q::loadFloats(gx + t), v = Q::loadFloats(gy + t), w = Q::loadFloats(gz + t);
+    sx = sx + u;
+    sy = sy + v;
+    sz = sz + w;
+    sq = sq + ((u * u + v * v) + w * w);
+  }
+  out.g = Vec3(sx.total(), sy.total(), sz.total());
+  out.sq = sq.total();
+}
+
+/// As rowSums, sum_b |g_ab|^2 (x_b - x_a) of particle a's row.
+template <class Q>
+inline Vec3 rowOffsets(const std::uint32_t* index, const float* gx, const float* gy,
+                       const float* gz, std::uint32_t k, std::uint32_t e, const Vec3* x,
+                       std::size_t a) {
+  Q ox = Q::all(0.0), oy = ox, oz = ox;
   const Q xa = Q::all(x[a].x()), ya = Q::all(x[a].y()), za = Q::all(x[a].z());
   for (std::uint32_t t = k; t < e; t += 4) {
     const Q u = Q::loadFloats(gx + t), v = Q::loadFloats(gy + t), w = Q::loadFloats(gz + t);
     const Q s = (u * u + v * v) + w * w;
-    sx = sx + u;
-    sy = sy + v;
-    sz = sz + w;
-    sq = sq + s;
-    if (!near) continue;
     const std::uint32_t* j = index + t;
     const double* p[4] = {x[j[0]].data(), x[j[1]].data(), x[j[2]].data(), x[j[3]].data()};
     Q xb, yb, zb;
@@ -78,21 +94,23 @@ inline void rowSums(const std::uint32_t* index, const float* gx, const float* gy
     oy = oy + s * (yb - ya);
     oz = oz + s * (zb - za);
   }
-  out.g = Vec3(sx.total(), sy.total(), sz.total());
-  out.sq = sq.total();
-  out.offset = near ? Vec3(ox.total(), oy.total(), oz.total()) : Vec3(Vec3::Zero());
+  return Vec3(ox.total(), oy.total(), oz.total());
 }
 
 #if defined(WAKE_HAS_LANES4)
 WAKE_TARGET_AVX void rowGradients4(const Vec3& xa, const Vec3* x, const std::uint32_t* nb,
                                    std::uint32_t count, const CubicSplineKernel& kernel,
-                                   double mass, double* g) {
-  rowGradients<Lanes4>(xa, x, nb, count, kernel, mass, g);
+                                   double mass, double* g, double* w) {
+  rowGradients<Lanes4>(xa, x, nb, count, kernel, mass, g, w);
 }
-WAKE_TARGET_AVX void rowSums4(const std::uint32_t* index, const float* gx, const float* gy,
-                              const float* gz, std::uint32_t k, std::uint32_t e, const Vec3* x,
-                              std::size_t a, bool near, GradientSums& out) {
-  rowSums<Lanes4>(index, gx, gy, gz, k, e, x, a, near, out);
+WAKE_TARGET_AVX void rowSums4(const float* gx, const float* gy, const float* gz, std::uint32_t k,
+                              std::uint32_t e, GradientSums& out) {
+  rowSums<Lanes4>(gx, gy, gz, k, e, out);
+}
+WAKE_TARGET_AVX Vec3 rowOffsets4(const std::uint32_t* index, const float* gx, const float* gy,
+                                 const float* gz, std::uint32_t k, std::uint32_t e, const Vec3* x,
+                                 std::size_t a) {
+  return rowOffsets<Lanes4>(index, gx, gy, gz, k, e, x, a);
 }
 #endif
 
@@ -101,7 +119,7 @@ WAKE_TARGET_AVX void rowSums4(const std::uint32_t* index, const float* gx, const
 template <class Sums>
 void DivergenceFreeSolver::buildLists(const PairLists& pairs, std::size_t r, const Vec3* x,
                                       const CubicSplineKernel& kernel, double mass, bool wide,
-                                      Sums* sums) {
+                                      double* density, Sums* sums) {
   Lists& L = lists_[r];
   const std::size_t i0 = pairs.range[r], i1 = pairs.range[r + 1], rows = i1 - i0;
   const std::vector<std::uint32_t>& before_offset = pairs.before_offset[r];
@@ -151,23 +169,49 @@ void DivergenceFreeSolver::buildLists(const PairLists& pairs, std::size_t r, con
   if (wide) gradients = rowGradients4;
 #endif
   std::vector<double>& g = L.scratch;
+  std::vector<double>& w = L.kernel;
+  double* wp = nullptr;
+  // The density, where asked for, in Fluid::computeFluidDensity's order (the same bits):
+  // each particle's pairs before the range first, then those in it as the rows reach them
+  // (a lower row adds its term to the higher one's partial sum), then its later ones.
   for (std::size_t q = 0; q < rows; ++q) {
     const std::size_t i = i0 + q;
     std::uint32_t k, e;
     earlier(q, k, e);
-    std::uint32_t slot = L.offset[q];
-    g.resize(3 * std::max<std::size_t>(e - k, pairs.count[i]));
-    gradients(x[i], x, before + k, e - k, kernel, mass, g.data());
-    for (std::uint32_t t = k; t < e; ++t)
-      put(slot++, before[t], &g[3 * (t - k)], 1.0f);
-    slot = L.offset[q] + L.size[q] - pairs.count[i];
+    double partial = 0.0;
+    if (e > k) {
+      g.resize(3 * std::size_t(e - k));
+      w.resize(e - k);
+      wp = density ? w.data() : nullptr;
+      gradients(x[i], x, before + k, e - k, kernel, mass, g.data(), wp);
+      std::uint32_t slot = L.offset[q];
+      for (std::uint32_t t = k; t < e; ++t) {
+        put(slot++, before[t], &g[3 * (t - k)], 1.0f);
+        if (wp) partial = partial + wp[t - k];
+      }
+    }
+    if (density) density[i] = partial;
+  }
+  const double self = mass * kernel.value(0.0);
+  for (std::size_t q = 0; q < rows; ++q) {
+    const std::size_t i = i0 + q;
+    std::uint32_t slot = L.offset[q] + L.size[q] - pairs.count[i];
     const std::uint32_t* nb = later + pairs.begin[i];
-    gradients(x[i], x, nb, pairs.count[i], kernel, mass, g.data());
+    g.resize(3 * std::size_t(pairs.count[i]));
+    w.resize(pairs.count[i]);
+    wp = density ? w.data() : nullptr;
+    gradients(x[i], x, nb, pairs.count[i], kernel, mass, g.data(), wp);
+    double sum = density ? density[i] : 0.0;
     for (std::uint32_t t = 0; t < pairs.count[i]; ++t) {
       const std::uint32_t j = nb[t];
       put(slot++, j, &g[3 * t], 1.0f);
-      if (j < i1) put(L.cursor[j - i0]++, static_cast<std::uint32_t>(i), &g[3 * t], -1.0f);
+      const bool inside = j < i1;
+      if (inside) put(L.cursor[j - i0]++, static_cast<std::uint32_t>(i), &g[3 * t], -1.0f);
+      if (!wp) continue;
+      sum = sum + wp[t];
+      if (inside) density[j] += wp[t];
     }
+    if (density) density[i] = self + mass * sum;
     // The padding: the particle itself with g = 0 (adds zeros).
     const double zero[3] = {0.0, 0.0, 0.0};
     for (; slot < L.offset[q + 1]; ++slot)
@@ -196,6 +240,35 @@ double DivergenceFreeSolver::chunkedSum(std::size_t n, F&& f) {
   return total;
 }
 
+void DivergenceFreeSolver::buildAllLists(const Fluid& fluid, double* density) {
+  const FluidState& st = fluid.state();
+  const PairLists& pairs = fluid.neighbors();
+  const std::size_t n = st.size();
+  if (pairs.size() != n)
+    throw std::logic_error("DivergenceFreeSolver: lists before updateNeighbors");
+  const Vec3* x = st.position.data();
+  lists_.resize(pairs.ranges());
+  std::vector<GradientSums>& sums = sums_;  // kept: no allocation per step
+  sums.assign(n, GradientSums{});
+  auto sum_row = rowSums<Quad2>;
+#if defined(WAKE_HAS_LANES4)
+  if (fluid.wideLanes()) sum_row = rowSums4;
+#endif
+  auto row_sums = [&sums, sum_row](std::size_t i, const Lists& L, std::size_t q) {
+    sum_row(L.gx.data(), L.gy.data(), L.gz.data(), L.offset[q], L.offset[q + 1], sums[i]);
+    sums[i].count = L.size[q];
+  };
+  forEachRange(pairs, [&](std::int64_t, std::int64_t, std::size_t r) {
+    buildLists(pairs, r, x, fluid.kernel(), fluid.particleMass(), fluid.wideLanes(), density,
+               &row_sums);
+  });
+  lists_particles_ = n;
+}
+
+void DivergenceFreeSolver::prepareLists(Fluid& fluid) {
+  buildAllLists(fluid, fluid.state().density.data());
+}
+
 void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& boundary) {
   const FluidState& st = fluid.state();
   const PairLists& pairs = fluid.neighbors();
@@ -207,29 +280,32 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
                 boundary.neighbors.size() != n || boundary.hydrostatic.size() != n ||
                 boundary.above_share.size() != n))
     throw std::logic_error("DivergenceFreeSolver::prepare: boundary terms of another size");
+  if (lists_particles_ != n) buildAllLists(fluid, nullptr);
+  lists_particles_ = kNoLists;  // the next step's lists are built again
   boundary_ = walls ? &boundary : nullptr;
   // The particles with samples in their support: the walls' terms are theirs alone.
   near_wall_.assign(n, 0);
   if (walls)
     for (std::size_t i = 0; i < n; ++i)
       near_wall_[i] = boundary.gradient[i].squaredNorm() > 0.0 ? 1 : 0;
-  const std::uint8_t* near = near_wall_.data();
-  const Vec3* x = st.position.data();
-  lists_.resize(pairs.ranges());
-  std::vector<GradientSums>& sums = sums_;  // kept: no allocation per step
-  sums.assign(n, GradientSums{});
-  auto sum_row = rowSums<Quad2>;
+  std::vector<GradientSums>& sums = sums_;
+  if (walls) {
+    // Their fluid's centre: sum_b |g_ab|^2 (x_b - x_a).
+    auto offsets = rowOffsets<Quad2>;
 #if defined(WAKE_HAS_LANES4)
-  if (fluid.wideLanes()) sum_row = rowSums4;
+    if (fluid.wideLanes()) offsets = rowOffsets4;
 #endif
-  auto row_sums = [&sums, x, near, sum_row](std::size_t i, const Lists& L, std::size_t q) {
-    sum_row(L.index.data(), L.gx.data(), L.gy.data(), L.gz.data(), L.offset[q], L.offset[q + 1], x,
-            i, near[i] != 0, sums[i]);
-    sums[i].count = L.size[q];
-  };
-  forEachRange(pairs, [&](std::int64_t, std::int64_t, std::size_t r) {
-    buildLists(pairs, r, x, fluid.kernel(), fluid.particleMass(), fluid.wideLanes(), &row_sums);
-  });
+    const Vec3* x = st.position.data();
+    forEachRange(pairs, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
+      const Lists& L = lists_[r];
+      for (std::int64_t i = i0; i < i1; ++i) {
+        if (!near_wall_[i]) continue;
+        const std::size_t q = static_cast<std::size_t>(i - i0);
+        sums[i].offset = offsets(L.index.data(), L.gx.data(), L.gy.data(), L.gz.data(), L.offset[q],
+                                 L.offset[q + 1], x, static_cast<std::size_t>(i));
+      }
+    });
+  }
   const CubicSplineKernel& kernel = fluid.kernel();
   const double m = fluid.particleMass();
   // A particle with (almost) no neighbours has no pressure to find.

@@ -122,9 +122,17 @@ class DivergenceFreeSolver {
 
   const DfsphParams& params() const { return params_; }
 
+  /// After the neighbour lists of this step, in place of Fluid::computeFluidDensity: each
+  /// pair's mass-weighted kernel gradient g_ab into the solver's lists, each particle's
+  /// sums of them, and the fluid's summation density into the state (the bits of
+  /// computeFluidDensity: one pass over the pairs for both, each pair's distance found
+  /// once). prepare() then takes these lists (the same neighbour lists and positions).
+  void prepareLists(Fluid& fluid);
+
   /// After the neighbour lists and the densities (with the boundary's share) of this step:
-  /// each pair's mass-weighted kernel gradient g_ab and each particle's factor a_a.
-  /// `boundary` must outlive the step's solves.
+  /// each pair's mass-weighted kernel gradient g_ab (prepareLists' when it ran for these
+  /// lists, else built here) and each particle's factor a_a. `boundary` must outlive the
+  /// step's solves.
   void prepare(const Fluid& fluid, const SolverBoundary& boundary);
 
   /// The divergence solve on the fluid's velocities; `dt` (s) only scales the error measure
@@ -158,11 +166,16 @@ class DivergenceFreeSolver {
     std::vector<std::uint32_t> offset, index, size, cursor;
     std::vector<float> gx, gy, gz;
     std::vector<double> scratch;  ///< one row's gradients as they are computed
+    std::vector<double> kernel;   ///< one row's kernel values (with the density)
   };
-  /// Builds range r's lists (and each particle's gradient sums: see prepare()).
+  /// Builds range r's lists (and each particle's gradient sums: see prepare()); with
+  /// `density` not null, the fluid's summation density of the range's particles into it.
   template <class Sums>
   void buildLists(const PairLists& pairs, std::size_t r, const Vec3* x,
-                  const CubicSplineKernel& kernel, double mass, bool wide, Sums* sums);
+                  const CubicSplineKernel& kernel, double mass, bool wide, double* density,
+                  Sums* sums);
+  /// Every range's lists and the gradient sums (sums_), and the density where not null.
+  void buildAllLists(const Fluid& fluid, double* density);
   /// range(i0, i1, view) for every range of particles [i0, i1) and its lists, in parallel.
   template <class RangeF>
   void forEachRow(const PairLists& pairs, RangeF&& range);
@@ -178,7 +191,10 @@ class DivergenceFreeSolver {
 
   DfsphParams params_;
   DfsphStats stats_;
-  std::vector<Lists> lists_;                  ///< (ranges)
+  std::vector<Lists> lists_;  ///< (ranges)
+  static constexpr std::size_t kNoLists = ~std::size_t(0);
+  /// The particles prepareLists built lists for, not yet taken by prepare (kNoLists: none).
+  std::size_t lists_particles_ = kNoLists;
   const SolverBoundary* boundary_ = nullptr;  ///< null: no boundary
   std::vector<double> factor_;                ///< (n) a_a (m^8 / kg^2)
   std::vector<Vec3> grad_sum_;                ///< (n) sum_b g_ab (kg/m^4)
