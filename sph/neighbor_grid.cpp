@@ -206,6 +206,54 @@ inline std::size_t appendIfWithin(const Vec3& pj, std::uint32_t j, double xi, do
   return used + static_cast<std::size_t>(isWithin(pj, xi, yi, zi, radius_sq));
 }
 
+/// appendIfWithin for the points [b, e) (consecutive in the sorted order), one after another.
+inline std::size_t appendRangeWithin(const Vec3* points, std::uint32_t b, std::uint32_t e,
+                                     double xi, double yi, double zi, double radius_sq,
+                                     std::uint32_t* dst, std::size_t used) {
+  for (std::uint32_t j = b; j < e; ++j)
+    used = appendIfWithin(points[j], j, xi, yi, zi, radius_sq, dst, used);
+  return used;
+}
+
+#if defined(WAKE_HAS_LANES4)
+/// As appendRangeWithin, four points at a time (AVX): each lane's distance the scalar
+/// operations (the same bits, the same list); the neighbours among four written at once
+/// (their indices' offsets from a table by the comparison's mask), so dst needs room for
+/// three entries more than the range's.
+WAKE_TARGET_AVX std::size_t appendRangeWithin4(const Vec3* points, std::uint32_t b, std::uint32_t e,
+                                               double xi, double yi, double zi, double radius_sq,
+                                               std::uint32_t* dst, std::size_t used) {
+  // The positions of the set bits of each 4-bit mask, ascending.
+  alignas(16) static const std::uint32_t kOffsets[16][4] = {
+      {0, 0, 0, 0}, {0, 0, 0, 0}, {1, 0, 0, 0}, {0, 1, 0, 0}, {2, 0, 0, 0}, {0, 2, 0, 0},
+      {1, 2, 0, 0}, {0, 1, 2, 0}, {3, 0, 0, 0}, {0, 3, 0, 0}, {1, 3, 0, 0}, {0, 1, 3, 0},
+      {2, 3, 0, 0}, {0, 2, 3, 0}, {1, 2, 3, 0}, {0, 1, 2, 3}};
+  const __m256d px = _mm256_set1_pd(xi), py = _mm256_set1_pd(yi), pz = _mm256_set1_pd(zi);
+  const __m256d limit = _mm256_set1_pd(radius_sq);
+  std::uint32_t j = b;
+  for (; j + 4 <= e; j += 4) {
+    // Four points' 12 doubles: (x0 y0 z0 x1) (y1 z1 x2 y2) (z2 x3 y3 z3).
+    const double* p = points[j].data();
+    const __m256d a = _mm256_loadu_pd(p), c = _mm256_loadu_pd(p + 4), d = _mm256_loadu_pd(p + 8);
+    const __m256d xy02 = _mm256_permute2f128_pd(a, c, 0x30);  // x0 y0 x2 y2
+    const __m256d zx13 = _mm256_permute2f128_pd(a, d, 0x21);  // z0 x1 z2 x3
+    const __m256d yz13 = _mm256_permute2f128_pd(c, d, 0x30);  // y1 z1 y3 z3
+    const __m256d x = _mm256_blend_pd(xy02, zx13, 0xA);
+    const __m256d y = _mm256_shuffle_pd(xy02, yz13, 0x5);
+    const __m256d z = _mm256_blend_pd(zx13, yz13, 0xA);
+    const __m256d dx = _mm256_sub_pd(px, x), dy = _mm256_sub_pd(py, y), dz = _mm256_sub_pd(pz, z);
+    const __m256d d2 = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)),
+                                     _mm256_mul_pd(dz, dz));
+    const int mask = _mm256_movemask_pd(_mm256_cmp_pd(d2, limit, _CMP_LT_OQ));
+    const __m128i offsets = _mm_load_si128(reinterpret_cast<const __m128i*>(kOffsets[mask]));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + used),
+                     _mm_add_epi32(_mm_set1_epi32(static_cast<int>(j)), offsets));
+    used += static_cast<std::size_t>(__builtin_popcount(static_cast<unsigned>(mask)));
+  }
+  return appendRangeWithin(points, j, e, xi, yi, zi, radius_sq, dst, used);
+}
+#endif
+
 /// Appends to dst[w..) the entries of the ascending runs a[0, na) and b[0, nb) whose flag
 /// (fa, fb) is `want`, merged in ascending order; returns the new w.
 inline std::size_t mergeWhere(const std::uint32_t* a, const std::uint8_t* fa, std::size_t na,
@@ -296,12 +344,18 @@ void fillPairLists(std::size_t n, PairLists& out, Row row) {
 }  // namespace
 
 void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
-                    PairLists& out) {
-  buildPairLists(grid, points.data(), points.size(), radius, out);
+                    PairLists& out, bool wide) {
+  buildPairLists(grid, points.data(), points.size(), radius, out, wide);
 }
 
 void buildPairLists(const UniformGrid& grid, const Vec3* points, std::size_t n, double radius,
-                    PairLists& out) {
+                    PairLists& out, bool wide) {
+  auto append = appendRangeWithin;
+#if defined(WAKE_HAS_LANES4)
+  if (wide) append = appendRangeWithin4;
+#else
+  (void)wide;
+#endif
   const double radius_sq = radius * radius;
   const std::size_t ranges = static_cast<std::size_t>(omp_get_max_threads());
   out.range.resize(ranges + 1);
@@ -318,12 +372,11 @@ void buildPairLists(const UniformGrid& grid, const Vec3* points, std::size_t n, 
               if (b <= i) b = static_cast<std::uint32_t>(i + 1);  // j > i only
               if (b >= e) return;
               // Grown by a quarter (the buffer stays for the next steps: doubling
-              // left up to twice the lists' size unused).
-              if (local.size() < used + (e - b))
-                local.resize(used + (e - b) + std::max<std::size_t>(used / 4, 4096));
-              std::uint32_t* dst = local.data();
-              for (std::uint32_t j = b; j < e; ++j)
-                used = appendIfWithin(points[j], j, xi, yi, zi, radius_sq, dst, used);
+              // left up to twice the lists' size unused); room for the four-at-a-time
+              // append's last write.
+              if (local.size() < used + (e - b) + 3)
+                local.resize(used + (e - b) + 3 + std::max<std::size_t>(used / 4, 4096));
+              used = append(points, b, e, xi, yi, zi, radius_sq, local.data(), used);
             });
         return used;
       });

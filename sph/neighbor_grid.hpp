@@ -5,6 +5,7 @@
 // about 40% fewer candidates to test).
 #pragma once
 
+#include "sph/lanes.hpp"
 #include "sph/types.hpp"
 
 #include <cmath>
@@ -295,12 +296,13 @@ struct PairLists {
 
 /// Builds the pair lists of the sorted points within `radius` (strictly closer), one range
 /// per OpenMP thread. `points` must be in the grid's sorted order. The lists do not depend
-/// on the number of threads; only where the ranges are cut does.
+/// on the number of threads; only where the ranges are cut does. `wide`: candidates tested
+/// four at a time where the CPU has AVX (hasWideLanes(); the same lists).
 void buildPairLists(const UniformGrid& grid, const std::vector<Vec3>& points, double radius,
-                    PairLists& out);
+                    PairLists& out, bool wide = hasWideLanes());
 /// As buildPairLists, for the n points from `points` on.
 void buildPairLists(const UniformGrid& grid, const Vec3* points, std::size_t n, double radius,
-                    PairLists& out);
+                    PairLists& out, bool wide = hasWideLanes());
 
 /// Keeps of the pairs `lists` holds (pair lists of the same points, e.g. built with a larger
 /// radius when they were elsewhere: every pair listed, or the candidates of a call before)
