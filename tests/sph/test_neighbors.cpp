@@ -107,13 +107,17 @@ void expectMatchesBruteForce(std::vector<Vec3> x, const Aabb& domain, double r) 
             << "particle " << i << ", reach " << reach << ", " << threads << " threads";
       }
       // The pair lists: each point's later neighbours, and those of its earlier ones
-      // that lie before its range's start (one range per thread).
-      PairLists pairs;
-      buildPairLists(grid, sorted, r, pairs);
-      ASSERT_EQ(pairs.ranges(), std::size_t(threads));
-      expectPairLists(
-          pairs, expected,
-          "reach " + std::to_string(reach) + ", " + std::to_string(threads) + " threads");
+      // that lie before its range's start (one range per thread); candidates tested one
+      // at a time and, where the CPU has AVX, four at a time.
+      for (bool wide : {false, true}) {
+        if (wide && !hasWideLanes()) continue;
+        PairLists pairs;
+        buildPairLists(grid, sorted, r, pairs, wide);
+        ASSERT_EQ(pairs.ranges(), std::size_t(threads));
+        expectPairLists(pairs, expected,
+                        "reach " + std::to_string(reach) + ", " + std::to_string(threads) +
+                            " threads" + (wide ? ", four at a time" : ""));
+      }
       if (threads == 1) {
         first = list;
       } else {
