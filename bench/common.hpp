@@ -83,6 +83,7 @@ inline StepTimings since(const StepTimings& after, const StepTimings& before) {
   t.rigid -= before.rigid;
   t.control -= before.control;
   t.correction -= before.correction;
+  t.solver -= before.solver;
   return t;
 }
 

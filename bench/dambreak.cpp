@@ -144,9 +144,9 @@ int main(int argc, char** argv) {
       const double itv = double(sim.divergenceIterations() - divergence0) / opt.steps;
       std::printf(
           "# dfsph: %.2f density + %.2f divergence iterations per step, %.1f ns per "
-          "particle per iteration (solver time / iterations)\n",
+          "particle per iteration (the solves' time / iterations)\n",
           it, itv,
-          1e9 * t.forces / opt.steps / double(sim.fluidParticles()) / std::max(it + itv, 1.0));
+          1e9 * t.solver / opt.steps / double(sim.fluidParticles()) / std::max(it + itv, 1.0));
     }
     if (threads == 1)
       single = per_step;

@@ -9,13 +9,15 @@
 //
 //   wake_bench_solvers [--scene FILE] [--particles N] [--sim-time T] [--threads K]
 //                      [--dfsph-max-dt DT] [--dfsph-cfl L] [--dfsph-max-error E]
-//                      [--solvers wcsph,dfsph] [--skin F]
+//                      [--solvers wcsph,dfsph] [--skin F] [--interleave T]
 //
 // Defaults: bench/spheric2.json at its own resolution (~105k particles), 1 simulated
 // second, 1 thread; the weakly compressible run as the scene has it (its time.cfl and
 // max_dt), the divergence-free one with time.cfl 0.6 (the largest it takes: dt <= 0.6 H /
 // |v|max), max_dt 1 ms and the scene's fluid.dfsph.max_density_error (--dfsph-cfl,
-// --dfsph-max-dt and --dfsph-max-error replace them).
+// --dfsph-max-dt and --dfsph-max-error replace them). The runs take turns of T simulated
+// seconds (--interleave, default 0.01), each timed on its own: a machine whose speed drifts
+// over the minutes of a run slows both solvers alike.
 #include "bullet_bridge/scene_world.hpp"
 #include "coupling/simulation.hpp"
 #include "io/process.hpp"
@@ -28,6 +30,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -46,13 +49,14 @@ struct Options {
   double dfsph_max_error = -1;  ///< > 0: fluid.dfsph.max_density_error for the DFSPH run
   std::vector<std::string> solvers = {"wcsph", "dfsph"};
   double skin = -1;  ///< --skin F: the neighbour lists' skin, F x the support (< 0: automatic)
+  double interleave = 0.01;  ///< simulated seconds each run takes in its turn
 };
 
 [[noreturn]] void usage(const char* program, const std::string& msg) {
   std::fprintf(stderr,
                "error: %s\nusage: %s [--scene FILE] [--particles N] [--sim-time T] [--threads K]"
                " [--dfsph-max-dt DT] [--dfsph-cfl L] [--dfsph-max-error E] [--solvers wcsph,dfsph]"
-               " [--skin F]\n",
+               " [--skin F] [--interleave T]\n",
                msg.c_str(), program);
   std::exit(2);
 }
@@ -86,6 +90,10 @@ Options parse(int argc, char** argv) {
     } else if (a == "--skin") {
       o.skin = std::stod(value("--skin"));
       if (!(o.skin >= 0) || !std::isfinite(o.skin)) usage(argv[0], "--skin must be >= 0");
+    } else if (a == "--interleave") {
+      o.interleave = std::stod(value("--interleave"));
+      if (!(o.interleave > 0) || !std::isfinite(o.interleave))
+        usage(argv[0], "--interleave must be > 0");
     } else if (a == "--solvers") {
       o.solvers.clear();
       std::stringstream ss(value("--solvers"));
@@ -113,7 +121,16 @@ int main(int argc, char** argv) {
   std::printf("%6s %8s %7s %9s %10s %10s %8s %8s %10s %10s %10s %9s %4s\n", "solver", "fluid",
               "steps", "wall[s]", "s/sim_s", "ns/p/step", "it/step", "div/step", "ns/p/it",
               "avg_err", "worst_err", "max_rho", "pen");
-  double wall_wcsph = 0, wall_dfsph = 0;
+  // Every solver's world first, then their steps in turns of `interleave` simulated
+  // seconds (each run still steps towards the end time: the same steps as alone), so that
+  // a machine whose speed drifts over minutes slows them alike.
+  struct Run {
+    std::string name;
+    bool dfsph = false;
+    std::unique_ptr<SceneWorld> world;
+    double wall = 0;
+  };
+  std::vector<Run> runs;
   for (const std::string& name : opt.solvers) {
     SceneFile scene;
     try {
@@ -125,36 +142,48 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "error: %s\n", e.what());
       return 1;
     }
-    const bool dfsph = name == "dfsph";
-    if (dfsph) {
+    Run run;
+    run.name = name;
+    run.dfsph = name == "dfsph";
+    if (run.dfsph) {
       scene.sim.solver = FluidSolver::Dfsph;
       scene.sim.max_dt = opt.dfsph_max_dt;
       scene.sim.cfl = opt.dfsph_cfl;
       if (opt.dfsph_max_error > 0) scene.sim.dfsph.max_density_error = opt.dfsph_max_error;
     }
     if (opt.skin >= 0) scene.sim.neighbor_skin = opt.skin * scene.sim.fluid.supportRadius();
-    SceneWorld world(scene.sim, scene.bodies);
-    world.coupled().start();
-    Simulation& sim = world.coupled().simulation();
-    const auto t0 = std::chrono::steady_clock::now();
-    while (sim.time() < opt.sim_time)
-      sim.step(opt.sim_time);
-    const double wall =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    run.world = std::make_unique<SceneWorld>(scene.sim, scene.bodies);
+    run.world->coupled().start();
+    runs.push_back(std::move(run));
+  }
+  for (double until = 0.0; until < opt.sim_time;) {
+    until = std::min(opt.sim_time, until + opt.interleave);
+    for (Run& run : runs) {
+      Simulation& sim = run.world->coupled().simulation();
+      const auto t0 = std::chrono::steady_clock::now();
+      while (sim.time() < until)
+        sim.step(opt.sim_time);
+      run.wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+  }
+  double wall_wcsph = 0, wall_dfsph = 0;
+  for (Run& run : runs) {
+    const Simulation& sim = run.world->coupled().simulation();
+    const double wall = run.wall;
     const double steps = double(sim.steps());
     const double n = double(sim.fluidParticles());
     const double iterations = double(sim.densityIterations()) / steps;
     const double divergence = double(sim.divergenceIterations()) / steps;
-    // The solver's share of the step (its passes are counted in `forces`, with the
-    // viscous forces) per iteration of either solve.
-    const double per_iteration =
-        dfsph ? 1e9 * sim.timings().forces / steps / n / std::max(1.0, iterations + divergence)
-              : 0.0;
+    // The solves' own time (their passes over the lists, the error sums and the
+    // impulses) per particle and per iteration of either solve.
+    const double per_iteration = run.dfsph ? 1e9 * sim.timings().solver / n /
+                                                 std::max(1.0, steps * (iterations + divergence))
+                                           : 0.0;
     std::printf("%6s %8.0f %7.0f %9.2f %10.2f %10.1f %8.2f %8.2f %10.1f %10.5f %10.5f %9.4f %4zu\n",
-                name.c_str(), n, steps, wall, wall / sim.time(), 1e9 * wall / steps / n, iterations,
-                divergence, per_iteration, sim.averageDensityError(), sim.maxStepDensityError(),
-                sim.maxDensityRatio(), sim.maxPenetrating());
-    (dfsph ? wall_dfsph : wall_wcsph) = wall;
+                run.name.c_str(), n, steps, wall, wall / sim.time(), 1e9 * wall / steps / n,
+                iterations, divergence, per_iteration, sim.averageDensityError(),
+                sim.maxStepDensityError(), sim.maxDensityRatio(), sim.maxPenetrating());
+    (run.dfsph ? wall_dfsph : wall_wcsph) = wall;
   }
   if (wall_wcsph > 0 && wall_dfsph > 0)
     std::printf("# dfsph needs %.2fx less wall time than wcsph for the same simulated time\n",

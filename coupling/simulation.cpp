@@ -426,7 +426,9 @@ void Simulation::computeFluidForces() {
     t0 = Clock::now();
     dfsph_->prepare(*fluid_, work_.solver_boundary);
     const double last_dt = data_.run.last_dt > 0 ? data_.run.last_dt : model_.max_dt;
+    const auto t_solve = Clock::now();
     data_.run.divergence_iterations += dfsph_->solveDivergence(*fluid_, last_dt);
+    timings_.solver += secondsSince(t_solve);
     fluid_->computeWithoutPressure();
     timings_.forces += secondsSince(t0);
   } else {
@@ -474,6 +476,7 @@ void Simulation::predict(double dt) {
     // two-way bodies, and x* from the new v*.
     t0 = Clock::now();
     data_.run.solver_iterations += dfsph_->solveDensity(*fluid_, model_.gravity, dt);
+    timings_.solver += secondsSince(t0);
     fluid_->predictPositions(dt);
     timings_.forces += secondsSince(t0);
     t0 = Clock::now();

@@ -172,6 +172,8 @@ struct SimulationState : RunData {
 struct StepTimings {
   double neighbors = 0, density = 0, forces = 0, boundary = 0, integration = 0, rigid = 0;
   double control = 0, correction = 0;  ///< parts of `boundary`
+  /// The divergence-free solves (their iterations over the lists; part of `forces`).
+  double solver = 0;
   double total() const { return neighbors + density + forces + boundary + integration + rigid; }
   /// The coupling's own cost: contacts, control forces, position correction, rigid step.
   double coupling() const { return control + correction + rigid; }

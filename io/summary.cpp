@@ -71,11 +71,17 @@ nlohmann::ordered_json makeSummary(const SceneFile& scene, const Simulation& sim
     std::snprintf(hash, sizeof(hash), "%016llx", static_cast<unsigned long long>(stateHash(sim)));
     j["state_hash"] = hash;  // the fluid's final positions and velocities
   }
-  j["timings"] = {{"neighbors", t.neighbors},     {"density", t.density},
-                  {"forces", t.forces},           {"boundary", t.boundary},
-                  {"integration", t.integration}, {"rigid", t.rigid},
-                  {"control", t.control},         {"correction", t.correction},
-                  {"coupling", t.coupling()},     {"total", t.total()}};
+  j["timings"] = {{"neighbors", t.neighbors},
+                  {"density", t.density},
+                  {"forces", t.forces},
+                  {"boundary", t.boundary},
+                  {"integration", t.integration},
+                  {"rigid", t.rigid},
+                  {"control", t.control},
+                  {"correction", t.correction},
+                  {"solver", t.solver},
+                  {"coupling", t.coupling()},
+                  {"total", t.total()}};
   return j;
 }
 
