@@ -445,7 +445,8 @@ void Simulation::computeFluidForces() {
   }
 
   t0 = Clock::now();
-  fluid_->computeAccelerations(model_.gravity, wall_accelerations);
+  fluid_->computeAccelerations(model_.gravity, wall_accelerations,
+                               dfsph_ ? &dfsph_->pairDerivatives() : nullptr);
   timings_.forces += secondsSince(t0);
   if (penalty_) {
     // Baseline: boundary forces join the fluid's forces; no control, no correction.

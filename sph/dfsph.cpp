@@ -29,15 +29,15 @@ int latticeNeighbors(const FluidParams& f) {
 }
 
 /// g_ab = m grad_a W(x_a - x_b) of a's neighbours nb[0 .. count) into g[3 t + c], several
-/// at a time in L (Lanes2, Lanes4: per lane the scalar operations, the same bits); where w
-/// is not null, W(|x_a - x_b|) into w[t] (the distance as Fluid::computeFluidDensity
-/// forms it: the same bits).
+/// at a time in L (Lanes2, Lanes4: per lane the scalar operations, the same bits), and
+/// W'(r) / r into d[t]; where w is not null, W(|x_a - x_b|) into w[t] (the distance as
+/// Fluid::computeFluidDensity and computeAccelerations form it: the same bits).
 template <class L>
 inline void rowGradients(const Vec3& xa, const Vec3* x, const std::uint32_t* nb,
                          std::uint32_t count, const CubicSplineKernel& kernel, double mass,
-                         double* g, double* w) {
+                         double* g, double* d, double* w) {
   constexpr int W = L::kWidth;
-  alignas(32) double out[4][W];
+  alignas(32) double out[5][W];
   for (std::uint32_t k = 0; k < count; k += W) {
     const double* p[W];
     for (int t = 0; t < W; ++t)
@@ -46,15 +46,18 @@ inline void rowGradients(const Vec3& xa, const Vec3* x, const std::uint32_t* nb,
     gather3Lanes(p, xb, yb, zb);
     const L dx = L::all(xa.x()) - xb, dy = L::all(xa.y()) - yb, dz = L::all(xa.z()) - zb;
     const L r = sqrt(dx * dx + dy * dy + dz * dz);
-    const L f = L::all(mass) * kernel.derivativeOverR(r);
+    const L dwr = kernel.derivativeOverR(r);
+    const L f = L::all(mass) * dwr;
     (f * dx).store(out[0]);
     (f * dy).store(out[1]);
     (f * dz).store(out[2]);
-    if (w) kernel.value(r).store(out[3]);
+    dwr.store(out[3]);
+    if (w) kernel.value(r).store(out[4]);
     for (int t = 0; t < W && k + t < count; ++t) {
       for (int c = 0; c < 3; ++c)
         g[3 * (k + t) + c] = out[c][t];
-      if (w) w[k + t] = out[3][t];
+      d[k + t] = out[3][t];
+      if (w) w[k + t] = out[4][t];
     }
   }
 }
@@ -100,8 +103,8 @@ inline Vec3 rowOffsets(const std::uint32_t* index, const float* gx, const float*
 #if defined(WAKE_HAS_LANES4)
 WAKE_TARGET_AVX void rowGradients4(const Vec3& xa, const Vec3* x, const std::uint32_t* nb,
                                    std::uint32_t count, const CubicSplineKernel& kernel,
-                                   double mass, double* g, double* w) {
-  rowGradients<Lanes4>(xa, x, nb, count, kernel, mass, g, w);
+                                   double mass, double* g, double* d, double* w) {
+  rowGradients<Lanes4>(xa, x, nb, count, kernel, mass, g, d, w);
 }
 WAKE_TARGET_AVX void rowSums4(const float* gx, const float* gy, const float* gz, std::uint32_t k,
                               std::uint32_t e, GradientSums& out) {
@@ -170,6 +173,11 @@ void DivergenceFreeSolver::buildLists(const PairLists& pairs, std::size_t r, con
 #endif
   std::vector<double>& g = L.scratch;
   std::vector<double>& w = L.kernel;
+  // Each pair's W'(r) / r where the fluid's pair lists have it (Fluid::computeAccelerations).
+  std::vector<double>& d_later = derivatives_.later[r];
+  std::vector<double>& d_before = derivatives_.before[r];
+  d_later.resize(pairs.end[r]);
+  d_before.resize(pairs.before[r].size());
   double* wp = nullptr;
   // The density, where asked for, in Fluid::computeFluidDensity's order (the same bits):
   // each particle's pairs before the range first, then those in it as the rows reach them
@@ -183,7 +191,7 @@ void DivergenceFreeSolver::buildLists(const PairLists& pairs, std::size_t r, con
       g.resize(3 * std::size_t(e - k));
       w.resize(e - k);
       wp = density ? w.data() : nullptr;
-      gradients(x[i], x, before + k, e - k, kernel, mass, g.data(), wp);
+      gradients(x[i], x, before + k, e - k, kernel, mass, g.data(), d_before.data() + k, wp);
       std::uint32_t slot = L.offset[q];
       for (std::uint32_t t = k; t < e; ++t) {
         put(slot++, before[t], &g[3 * (t - k)], 1.0f);
@@ -200,7 +208,8 @@ void DivergenceFreeSolver::buildLists(const PairLists& pairs, std::size_t r, con
     g.resize(3 * std::size_t(pairs.count[i]));
     w.resize(pairs.count[i]);
     wp = density ? w.data() : nullptr;
-    gradients(x[i], x, nb, pairs.count[i], kernel, mass, g.data(), wp);
+    gradients(x[i], x, nb, pairs.count[i], kernel, mass, g.data(), d_later.data() + pairs.begin[i],
+              wp);
     double sum = density ? density[i] : 0.0;
     for (std::uint32_t t = 0; t < pairs.count[i]; ++t) {
       const std::uint32_t j = nb[t];
@@ -248,6 +257,8 @@ void DivergenceFreeSolver::buildAllLists(const Fluid& fluid, double* density) {
     throw std::logic_error("DivergenceFreeSolver: lists before updateNeighbors");
   const Vec3* x = st.position.data();
   lists_.resize(pairs.ranges());
+  derivatives_.later.resize(pairs.ranges());
+  derivatives_.before.resize(pairs.ranges());
   std::vector<GradientSums>& sums = sums_;  // kept: no allocation per step
   sums.assign(n, GradientSums{});
   auto sum_row = rowSums<Quad2>;

@@ -155,6 +155,11 @@ class DivergenceFreeSolver {
 
   const DfsphStats& stats() const { return stats_; }
 
+  /// W'(r) / r of each pair of the fluid's pair lists as the last lists were built (for
+  /// Fluid::computeAccelerations in the same step: the viscous forces without a square root
+  /// and kernel per pair).
+  const PairDerivatives& pairDerivatives() const { return derivatives_; }
+
  private:
   /// Each particle's whole neighbour list with the pairs' g_ab, per range of the pair lists
   /// (a range's particles [i0, i1) are its rows q = i - i0): the neighbours of row q,
@@ -191,7 +196,8 @@ class DivergenceFreeSolver {
 
   DfsphParams params_;
   DfsphStats stats_;
-  std::vector<Lists> lists_;  ///< (ranges)
+  std::vector<Lists> lists_;     ///< (ranges)
+  PairDerivatives derivatives_;  ///< of the fluid's pair lists
   static constexpr std::size_t kNoLists = ~std::size_t(0);
   /// The particles prepareLists built lists for, not yet taken by prepare (kNoLists: none).
   std::size_t lists_particles_ = kNoLists;

@@ -399,7 +399,8 @@ struct AccelerationInputs {
   Vec3 gravity;
   const Vec3* add;  ///< (n) or null
   Vec3* out;
-  double* sums;  ///< (6 n) scratch: partial sums
+  double* sums;                        ///< (6 n) scratch: partial sums
+  const PairDerivatives* derivatives;  ///< each pair's W'(r) / r, or null: computed here
 };
 
 /// The pair loop of Fluid::computeAccelerations for the particles [i0, i1) (one thread's
@@ -426,9 +427,14 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
   double* sums = in.sums;
   const double* p = in.p;
   const std::uint32_t end = static_cast<std::uint32_t>(i1);
+  const double* dwr_later = in.derivatives ? in.derivatives->later[r].data() : nullptr;
+  const double* dwr_before = in.derivatives ? in.derivatives->before[r].data() : nullptr;
   // (acc.x, acc.y), (acc.z, lap.x), (lap.y, lap.z)
   auto add = [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e,
                  bool both) {
+    // The stored W'(r) / r of these pairs (at the lists' positions k ..), if any.
+    const double* known = in.derivatives ? (both ? dwr_later : dwr_before) : nullptr;
+    std::uint64_t at = k;  // the position of the group's first pair
     double* own = sums + 6 * i;
     const double pr2_i = p ? p[i] * in.inv_rho[i] * in.inv_rho[i] : 0.0;
     Lanes2 acc_xy{}, acc_z_lap_x{}, lap_yz{};
@@ -453,7 +459,16 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
       const M dx = M::all(x[i].x()) - xj, dy = M::all(x[i].y()) - yj, dz = M::all(x[i].z()) - zj;
       const M du = M::all(v[i].x()) - uj, dv = M::all(v[i].y()) - vj, dw = M::all(v[i].z()) - wj;
       const M r_sq = dx * dx + dy * dy + dz * dz;
-      const M dwr = kernel.derivativeOverR(sqrt(r_sq));
+      auto stored = [&]() {
+        if (used == M::kWidth) return M::load(known + at);
+        // An unused lane repeats the first pair, as its index does.
+        double d[M::kWidth];
+        for (int t = 0; t < M::kWidth; ++t)
+          d[t] = known[at + (t < used ? t : 0)];
+        return M::load(d);
+      };
+      const M dwr = known ? stored() : kernel.derivativeOverR(sqrt(r_sq));
+      at += static_cast<std::uint64_t>(used);
       // P / rho^2 of each side, (P rho^-1) rho^-1 (one neighbour at a time: the same bits).
       const M inv_rho_j = gatherLanes(zero, in.inv_rho, j);
       M coeff = zero;
@@ -517,7 +532,8 @@ WAKE_TARGET_AVX void accelerationRange4(std::int64_t i0, std::int64_t i1, std::s
 
 }  // namespace
 
-void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& extra) {
+void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& extra,
+                                 const PairDerivatives* derivatives) {
   if (neighbors_.size() != state_.size())
     throw std::logic_error("Fluid::computeAccelerations before updateNeighbors");
   const std::int64_t n = static_cast<std::int64_t>(state_.size());
@@ -550,6 +566,10 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
   if (wide_lanes_) range = uniform ? accelerationRange4<true> : accelerationRange4<false>;
 #endif
   in.sums = step_.view<double>(0, 6 * state_.size());
+  in.derivatives = derivatives;
+  if (derivatives && (derivatives->later.size() != neighbors_.ranges() ||
+                      derivatives->before.size() != neighbors_.ranges()))
+    throw std::invalid_argument("computeAccelerations: derivatives of other pair lists");
   forEachRange(neighbors_,
                [&](std::int64_t i0, std::int64_t i1, std::size_t r) { range(i0, i1, r, in); });
 }

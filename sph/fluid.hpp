@@ -112,6 +112,13 @@ struct FluidState {
   bool keep_pressure_mean_ = false;
 };
 
+/// W'(r) / r (1/m^5) of each pair of a fluid's pair lists (PairLists), laid out as they
+/// are: later[r][t] of the pair at lists.later[r][t] (t < lists.end[r]), before[r][k] of the
+/// one at lists.before[r][k]. Entries of candidates that are not pairs are not read.
+struct PairDerivatives {
+  std::vector<std::vector<double>> later, before;  ///< (ranges)
+};
+
 /// The fluid solver: its parameters (the model), the neighbour grid and scratch space, and
 /// the state it steps. The state is the caller's (`state`: Simulation keeps it with the
 /// rest of a run's data, coupling/simulation.hpp) or, without one, the solver's own.
@@ -211,7 +218,12 @@ class Fluid {
   /// spline, so Morris's regulariser (+0.01 H^2 in the denominator) is not needed: it
   /// would change the factor by 1 % at r = H (about the spacing particles keep) and by
   /// 4 % at r = H / 2.
-  void computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& extra = {});
+  ///
+  /// `derivatives`: W'(r) / r of each pair of the current lists where a pass over them
+  /// already found it (DivergenceFreeSolver::prepareLists), read instead of computed again
+  /// (the same bits: no square root and kernel per pair).
+  void computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& extra = {},
+                            const PairDerivatives* derivatives = nullptr);
 
   /// The step's prediction with every force but the boundaries' control: v* = v + dt a
   /// (in the state), x* = x + dt v* (predictedPositions), the velocities before kept
