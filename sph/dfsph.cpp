@@ -386,14 +386,27 @@ inline void ratesRange(std::int64_t i0, std::int64_t i1, const RowView& L, const
   }
 }
 
-/// The pair part of the velocity change of the particles [i0, i1) for the increments ds:
-/// dv_a = -ds_a sum_b g_ab - sum_b ds_b g_ab, and where near[a], sum_b |g_ab|^2 ds_b into
-/// weighted[a] (no branch on the pairs' values: s is zero at random where the fluid is not
-/// compressed, and a mispredicted branch costs more than the terms).
+/// Where an iteration's impulse goes, particle by particle: the velocities (and their float
+/// copy that the rates read), s and, near walls, the walls' share (s^w_a, from the
+/// neighbours' increments weighted by |g_ab|^2).
+struct ImpulseTargets {
+  Vec3* velocity;
+  float* velocity_f;  ///< (4 n)
+  double* s;
+  double* wall_impulse;
+  const double* weight;       ///< sum_b |g_ab|^2
+  const Vec3* wall_gradient;  ///< G_a (read where near[a])
+};
+
+/// The velocity change of the particles [i0, i1) for the increments ds, applied as each
+/// row is done (the pass reads only the increments of the others): dv_a = -ds_a sum_b g_ab
+/// - sum_b ds_b g_ab, and where near[a] the walls' -(s_a + s^w_a) G_a with the mean
+/// sum_b |g_ab|^2 ds_b / sum_b |g_ab|^2 of the fluid around a (no branch on the pairs'
+/// values: s is zero at random where the fluid is not compressed, and a mispredicted branch
+/// costs more than the terms).
 template <class Q>
 inline void impulseRange(std::int64_t i0, std::int64_t i1, const RowView& L, const double* ds,
-                         const Vec3* grad_sum, const std::uint8_t* near, Vec3* dv,
-                         double* weighted) {
+                         const Vec3* grad_sum, const std::uint8_t* near, const ImpulseTargets& to) {
   for (std::int64_t i = i0; i < i1; ++i) {
     const std::size_t q = static_cast<std::size_t>(i - i0);
     Q sx = Q::all(0.0), sy = sx, sz = sx, sw = sx;
@@ -408,7 +421,6 @@ inline void impulseRange(std::int64_t i0, std::int64_t i1, const RowView& L, con
         sz = sz + s * gz;
         sw = sw + ((gx * gx + gy * gy) + gz * gz) * s;
       }
-      weighted[i] = sw.total();
     } else {
       for (std::uint32_t t = L.offset[q]; t < e; t += 4) {
         const Q s = Q::gather(ds, L.index + t);
@@ -417,7 +429,20 @@ inline void impulseRange(std::int64_t i0, std::int64_t i1, const RowView& L, con
         sz = sz + s * Q::loadFloats(L.gz + t);
       }
     }
-    dv[i] = -ds[i] * grad_sum[i] - Vec3(sx.total(), sy.total(), sz.total());
+    Vec3 change = -ds[i] * grad_sum[i] - Vec3(sx.total(), sy.total(), sz.total());
+    if (near[i]) {
+      // s_a + s^w_a: a's own and the mean of the fluid's around it.
+      const double around = to.weight[i] > 0.0 ? sw.total() / to.weight[i] : ds[i];
+      const double wall = 1.5 * ds[i] + 0.5 * around;
+      change -= wall * to.wall_gradient[i];
+      to.wall_impulse[i] += wall;
+    }
+    Vec3& v = to.velocity[i];
+    v += change;
+    to.s[i] += ds[i];
+    float* vf = to.velocity_f + 4 * i;
+    for (int c = 0; c < 3; ++c)
+      vf[c] = static_cast<float>(v[c]);
   }
 }
 
@@ -429,8 +454,8 @@ WAKE_TARGET_AVX void ratesRange4(std::int64_t i0, std::int64_t i1, const RowView
 }
 WAKE_TARGET_AVX void impulseRange4(std::int64_t i0, std::int64_t i1, const RowView& L,
                                    const double* ds, const Vec3* grad_sum, const std::uint8_t* near,
-                                   Vec3* dv, double* weighted) {
-  impulseRange<Lanes4>(i0, i1, L, ds, grad_sum, near, dv, weighted);
+                                   const ImpulseTargets& to) {
+  impulseRange<Lanes4>(i0, i1, L, ds, grad_sum, near, to);
 }
 #endif
 
@@ -451,13 +476,17 @@ void DivergenceFreeSolver::densityRates(const Fluid& fluid) {
   const double* flux = boundary_ ? boundary_->flux.data() : nullptr;
   const std::int64_t n = static_cast<std::int64_t>(st.size());
   rate_.resize(st.size());
-  // The neighbours' velocities as floats, four per particle (one load each).
+  // The neighbours' velocities as floats, four per particle (one load each); the solves'
+  // impulses keep them up to date.
   velocity_f_.resize(4 * st.size());
   float* vf = velocity_f_.data();
+  if (!floats_fresh_) {
 #pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < n; ++i)
-    for (int c = 0; c < 4; ++c)
-      vf[4 * i + c] = c < 3 ? static_cast<float>(v[i][c]) : 0.0f;
+    for (std::int64_t i = 0; i < n; ++i)
+      for (int c = 0; c < 4; ++c)
+        vf[4 * i + c] = c < 3 ? static_cast<float>(v[i][c]) : 0.0f;
+    floats_fresh_ = true;
+  }
   auto range = ratesRange<Quad2>;
 #if defined(WAKE_HAS_LANES4)
   if (fluid.wideLanes()) range = ratesRange4;
@@ -469,32 +498,17 @@ void DivergenceFreeSolver::densityRates(const Fluid& fluid) {
 
 void DivergenceFreeSolver::applyImpulse(Fluid& fluid) {
   FluidState& st = fluid.state();
-  const std::size_t n = st.size();
-  // Velocities change once every particle's change is known.
-  change_.resize(n);
-  weighted_.resize(n);
   auto range = impulseRange<Quad2>;
 #if defined(WAKE_HAS_LANES4)
   if (fluid.wideLanes()) range = impulseRange4;
 #endif
+  const ImpulseTargets to{st.velocity.data(), velocity_f_.data(),
+                          s_.data(),          wall_impulse_.data(),
+                          weight_.data(),     boundary_ ? boundary_->gradient.data() : nullptr};
   forEachRow(fluid.neighbors(), [&](std::int64_t i0, std::int64_t i1, const RowView& L) {
-    range(i0, i1, L, ds_.data(), grad_sum_.data(), near_wall_.data(), change_.data(),
-          weighted_.data());
+    range(i0, i1, L, ds_.data(), grad_sum_.data(), near_wall_.data(), to);
   });
-  const std::int64_t sn = static_cast<std::int64_t>(n);
-#pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < sn; ++i) {
-    Vec3 change = change_[i];
-    if (near_wall_[i]) {
-      // s_a + s^w_a: a's own and the mean of the fluid's around it.
-      const double around = weight_[i] > 0.0 ? weighted_[i] / weight_[i] : ds_[i];
-      const double wall = 1.5 * ds_[i] + 0.5 * around;
-      change -= wall * boundary_->gradient[i];
-      wall_impulse_[i] += wall;
-    }
-    st.velocity[i] += change;
-    s_[i] += ds_[i];
-  }
+  floats_fresh_ = true;  // every row wrote its velocity's floats
 }
 
 void DivergenceFreeSolver::applyHydrostatic(Fluid& fluid, const Vec3& gravity, double dt) {
@@ -512,9 +526,11 @@ void DivergenceFreeSolver::applyHydrostatic(Fluid& fluid, const Vec3& gravity, d
     lift_[i] = l > 0.0 ? l : b.above_share[i] * l;
     st.velocity[i] -= dt * (b.hydrostatic[i] + (lift_[i] * inv_rho0) * b.gradient[i]);
   }
+  floats_fresh_ = false;
 }
 
 int DivergenceFreeSolver::solveDivergence(Fluid& fluid, double dt) {
+  floats_fresh_ = false;  // the velocities changed since the last solve
   const std::size_t n = fluid.state().size();
   stats_.divergence_iterations = 0;
   stats_.divergence_error = 0.0;
@@ -550,6 +566,7 @@ int DivergenceFreeSolver::solveDivergence(Fluid& fluid, double dt) {
 }
 
 int DivergenceFreeSolver::solveDensity(Fluid& fluid, const Vec3& gravity, double dt) {
+  floats_fresh_ = false;  // the velocities changed since the last solve
   FluidState& st = fluid.state();
   const std::size_t n = st.size();
   stats_.density_iterations = 0;

@@ -186,7 +186,8 @@ class DivergenceFreeSolver {
   void forEachRow(const PairLists& pairs, RangeF&& range);
   /// D_a (rate of change of density) of every particle into rate_.
   void densityRates(const Fluid& fluid);
-  /// Applies the increments ds_ (s per particle) to the velocities and to s_, wall_impulse_.
+  /// Applies the increments ds_ (s per particle) to the velocities (and velocity_f_) and to
+  /// s_, wall_impulse_.
   void applyImpulse(Fluid& fluid);
   /// The hydrostatic part of the walls' pressure (see above) on the velocities, into lift_.
   void applyHydrostatic(Fluid& fluid, const Vec3& gravity, double dt);
@@ -211,11 +212,10 @@ class DivergenceFreeSolver {
   std::vector<Vec3> centre_;                  ///< (n) c_a (m, with a boundary)
   std::vector<double> rate_;                  ///< (n) D_a
   std::vector<float> velocity_f_;             ///< (4 n) the velocities as floats
+  bool floats_fresh_ = false;                 ///< velocity_f_ is of the velocities as they are
   bool rates_fresh_ = false;                  ///< rate_ is of the velocities as they are
   std::vector<double> s_;                     ///< (n) this solve's s so far
   std::vector<double> ds_;                    ///< (n) this iteration's increment of s
-  std::vector<Vec3> change_;                  ///< (n) one iteration's velocity change
-  std::vector<double> weighted_;              ///< (n) one iteration's sum_b w_ab ds_b (near walls)
   std::vector<double> wall_impulse_;          ///< (n) sum of s_a + s^w_a over the step's solves
   std::vector<double> lift_;                  ///< (n) l_a of the density solve
 };
