@@ -13,8 +13,6 @@ namespace wake {
 
 namespace {
 
-using GradientSums = DfsphGradientSums;
-
 /// Neighbours of a particle inside a fluid at rest on the lattice (spacing s, support 2H):
 /// the lattice points closer than the support, itself left out.
 int latticeNeighbors(const FluidParams& f) {
@@ -62,24 +60,8 @@ inline void rowGradients(const Vec3& xa, const Vec3* x, const std::uint32_t* nb,
   }
 }
 
-/// A row's sums (padded to groups of four; the padding adds zeros) in four partial sums of
-/// Q (Quad2, Lanes4: the same bits): sum_b g_ab and sum_b |g_ab|^2.
-template <class Q>
-inline void rowSums(const float* gx, const float* gy, const float* gz, std::uint32_t k,
-                    std::uint32_t e, GradientSums& out) {
-  Q sx = Q::all(0.0), sy = sx, sz = sx, sq = sx;
-  for (std::uint32_t t = k; t < e; t += 4) {
-    const Q u = Q::loadFloats(gx + t), v = Q::loadFloats(gy + t), w = Q::loadFloats(gz + t);
-    sx = sx + u;
-    sy = sy + v;
-    sz = sz + w;
-    sq = sq + ((u * u + v * v) + w * w);
-  }
-  out.g = Vec3(sx.total(), sy.total(), sz.total());
-  out.sq = sq.total();
-}
-
-/// As rowSums, sum_b |g_ab|^2 (x_b - x_a) of particle a's row.
+/// sum_b |g_ab|^2 (x_b - x_a) of particle a's row (padded to groups of four; the padding adds
+/// zeros) in four partial sums of Q (Quad2, Lanes4: the same bits).
 template <class Q>
 inline Vec3 rowOffsets(const std::uint32_t* index, const float* gx, const float* gy,
                        const float* gz, std::uint32_t k, std::uint32_t e, const Vec3* x,
@@ -106,10 +88,6 @@ WAKE_TARGET_AVX void rowGradients4(const Vec3& xa, const Vec3* x, const std::uin
                                    double mass, double* g, double* d, double* w) {
   rowGradients<Lanes4>(xa, x, nb, count, kernel, mass, g, d, w);
 }
-WAKE_TARGET_AVX void rowSums4(const float* gx, const float* gy, const float* gz, std::uint32_t k,
-                              std::uint32_t e, GradientSums& out) {
-  rowSums<Lanes4>(gx, gy, gz, k, e, out);
-}
 WAKE_TARGET_AVX Vec3 rowOffsets4(const std::uint32_t* index, const float* gx, const float* gy,
                                  const float* gz, std::uint32_t k, std::uint32_t e, const Vec3* x,
                                  std::size_t a) {
@@ -119,10 +97,9 @@ WAKE_TARGET_AVX Vec3 rowOffsets4(const std::uint32_t* index, const float* gx, co
 
 }  // namespace
 
-template <class Sums>
 void DivergenceFreeSolver::buildLists(const PairLists& pairs, std::size_t r, const Vec3* x,
                                       const CubicSplineKernel& kernel, double mass, bool wide,
-                                      double* density, Sums* sums) {
+                                      double* density) {
   Lists& L = lists_[r];
   const std::size_t i0 = pairs.range[r], i1 = pairs.range[r + 1], rows = i1 - i0;
   const std::vector<std::uint32_t>& before_offset = pairs.before_offset[r];
@@ -225,8 +202,6 @@ void DivergenceFreeSolver::buildLists(const PairLists& pairs, std::size_t r, con
     const double zero[3] = {0.0, 0.0, 0.0};
     for (; slot < L.offset[q + 1]; ++slot)
       put(slot, static_cast<std::uint32_t>(i), zero, 1.0f);
-    // Row q is whole: the earlier rows of the range have written their pairs into it.
-    if (sums) (*sums)(i, L, q);
   }
 }
 
@@ -259,19 +234,8 @@ void DivergenceFreeSolver::buildAllLists(const Fluid& fluid, double* density) {
   lists_.resize(pairs.ranges());
   derivatives_.later.resize(pairs.ranges());
   derivatives_.before.resize(pairs.ranges());
-  std::vector<GradientSums>& sums = sums_;  // kept: no allocation per step
-  sums.assign(n, GradientSums{});
-  auto sum_row = rowSums<Quad2>;
-#if defined(WAKE_HAS_LANES4)
-  if (fluid.wideLanes()) sum_row = rowSums4;
-#endif
-  auto row_sums = [&sums, sum_row](std::size_t i, const Lists& L, std::size_t q) {
-    sum_row(L.gx.data(), L.gy.data(), L.gz.data(), L.offset[q], L.offset[q + 1], sums[i]);
-    sums[i].count = L.size[q];
-  };
   forEachRange(pairs, [&](std::int64_t, std::int64_t, std::size_t r) {
-    buildLists(pairs, r, x, fluid.kernel(), fluid.particleMass(), fluid.wideLanes(), density,
-               &row_sums);
+    buildLists(pairs, r, x, fluid.kernel(), fluid.particleMass(), fluid.wideLanes(), density);
   });
   lists_particles_ = n;
 }
@@ -299,7 +263,7 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
   if (walls)
     for (std::size_t i = 0; i < n; ++i)
       near_wall_[i] = boundary.gradient[i].squaredNorm() > 0.0 ? 1 : 0;
-  std::vector<GradientSums>& sums = sums_;
+  offset_.assign(n, Vec3::Zero());
   if (walls) {
     // Their fluid's centre: sum_b |g_ab|^2 (x_b - x_a).
     auto offsets = rowOffsets<Quad2>;
@@ -312,42 +276,28 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
       for (std::int64_t i = i0; i < i1; ++i) {
         if (!near_wall_[i]) continue;
         const std::size_t q = static_cast<std::size_t>(i - i0);
-        sums[i].offset = offsets(L.index.data(), L.gx.data(), L.gy.data(), L.gz.data(), L.offset[q],
-                                 L.offset[q + 1], x, static_cast<std::size_t>(i));
+        offset_[i] = offsets(L.index.data(), L.gx.data(), L.gy.data(), L.gz.data(), L.offset[q],
+                             L.offset[q + 1], x, static_cast<std::size_t>(i));
       }
     });
   }
-  const CubicSplineKernel& kernel = fluid.kernel();
-  const double m = fluid.particleMass();
-  // A particle with (almost) no neighbours has no pressure to find.
-  const double h = kernel.smoothingLength();
-  const double scale = m * std::abs(kernel.derivativeOverR(h)) * h;
-  const double eps = 1e-6 * scale * scale;
+  // The gradient sums and the factors come with the first pass over the lists (the step's
+  // first rates, then computeFactors), which reads each pair's g_ab anyway.
+  factors_ready_ = false;
   factor_.resize(n);
   grad_sum_.resize(n);
   sparse_.resize(n);
   weight_.resize(n);
   centre_.resize(n);
+  count_.resize(n);
+  const CubicSplineKernel& kernel = fluid.kernel();
+  const double h = kernel.smoothingLength();
+  const double scale = fluid.particleMass() * std::abs(kernel.derivativeOverR(h)) * h;
+  factor_floor_ = 1e-6 * scale * scale;
   // Fewer than 3/4 of a resting particle's neighbours (fluid and wall samples): a splash,
   // whose rate of compression says little (SPlisHSPlasH's 20 of ~26 at this support).
-  const std::uint32_t enough =
+  enough_neighbors_ =
       static_cast<std::uint32_t>(std::ceil(0.75 * latticeNeighbors(fluid.params())));
-  const std::int64_t sn = static_cast<std::int64_t>(n);
-#pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < sn; ++i) {
-    // s_a's own push: -s_a (sum_b g_ab + 3/2 G_a) (its own half of s^w_a); the change of
-    // D_a it makes: -s_a [(sum_b g_ab + G_a) . (sum_b g_ab + 3/2 G_a) + sum_b |g_ab|^2].
-    const Vec3 wall = walls ? boundary.gradient[i] : Vec3(Vec3::Zero());
-    grad_sum_[i] = sums[i].g;
-    const Vec3 g = sums[i].g + wall;
-    const double denominator = std::max(g.dot(g + 0.5 * wall), 0.0) + sums[i].sq;
-    factor_[i] = denominator > eps ? 1.0 / denominator : 0.0;
-    const std::uint32_t around = sums[i].count + (walls ? boundary.neighbors[i] : 0u);
-    sparse_[i] = around < enough;
-    weight_[i] = sums[i].sq;
-    // The fluid around a, a itself weighing as much as its neighbours together.
-    centre_[i] = sums[i].sq > 0.0 ? Vec3(0.5 / sums[i].sq * sums[i].offset) : Vec3(Vec3::Zero());
-  }
   wall_impulse_.assign(n, 0.0);  // a new step
   lift_.assign(n, 0.0);
   rates_fresh_ = false;
@@ -359,28 +309,51 @@ namespace {
 struct RowView {
   const std::uint32_t *offset, *index;
   const float *gx, *gy, *gz;
+  const std::uint32_t* size;  ///< each row's pairs (without the padding)
+};
+
+/// What the step's first rates also find, row by row: sum_b g_ab, sum_b |g_ab|^2 and the
+/// fluid neighbours of each particle.
+struct RowSums {
+  Vec3* gradient;
+  double* square;
+  std::uint32_t* count;
 };
 
 /// The density rates D_a of the particles [i0, i1) (one range), four pairs at a time in
 /// Q (Quad2 or Lanes4: the same bits): D_a = v_a . sum_b g_ab - sum_b v_b . g_ab, plus the
-/// walls' v_a . G_a - B_a where `wall_gradient` is not null.
-template <class Q>
+/// walls' v_a . G_a - B_a where `wall_gradient` is not null. kSums: the step's first rates,
+/// which also sum each row's g_ab and |g_ab|^2 (four partial sums fixed by the list, as the
+/// rates) into `sums` (sum_b g_ab is then read from there).
+template <class Q, bool kSums>
 inline void ratesRange(std::int64_t i0, std::int64_t i1, const RowView& L, const Vec3* v,
                        const float* vf, const Vec3* grad_sum, const Vec3* wall_gradient,
-                       const double* flux, double* rate) {
+                       const double* flux, double* rate, const RowSums& sums) {
   for (std::int64_t i = i0; i < i1; ++i) {
     const std::size_t q = static_cast<std::size_t>(i - i0);
-    Q sum = Q::all(0.0);
+    Q sum = Q::all(0.0), sx = sum, sy = sum, sz = sum, sq = sum;
     for (std::uint32_t t = L.offset[q]; t < L.offset[q + 1]; t += 4) {
       const std::uint32_t* j = L.index + t;
       const float* p[4] = {vf + 4 * std::size_t(j[0]), vf + 4 * std::size_t(j[1]),
                            vf + 4 * std::size_t(j[2]), vf + 4 * std::size_t(j[3])};
       Q vx, vy, vz;
       Q::gather3Floats(p, vx, vy, vz);
-      sum = sum + ((vx * Q::loadFloats(L.gx + t) + vy * Q::loadFloats(L.gy + t)) +
-                   vz * Q::loadFloats(L.gz + t));
+      const Q gx = Q::loadFloats(L.gx + t), gy = Q::loadFloats(L.gy + t),
+              gz = Q::loadFloats(L.gz + t);
+      sum = sum + ((vx * gx + vy * gy) + vz * gz);
+      if (!kSums) continue;
+      sx = sx + gx;
+      sy = sy + gy;
+      sz = sz + gz;
+      sq = sq + ((gx * gx + gy * gy) + gz * gz);
     }
-    double d = v[i].dot(grad_sum[i]) - sum.total();
+    if (kSums) {
+      sums.gradient[i] = Vec3(sx.total(), sy.total(), sz.total());
+      sums.square[i] = sq.total();
+      sums.count[i] = L.size[q];
+    }
+    const Vec3& g = kSums ? sums.gradient[i] : grad_sum[i];
+    double d = v[i].dot(g) - sum.total();
     if (wall_gradient) d += v[i].dot(wall_gradient[i]) - flux[i];
     rate[i] = d;
   }
@@ -447,10 +420,11 @@ inline void impulseRange(std::int64_t i0, std::int64_t i1, const RowView& L, con
 }
 
 #if defined(WAKE_HAS_LANES4)
+template <bool kSums>
 WAKE_TARGET_AVX void ratesRange4(std::int64_t i0, std::int64_t i1, const RowView& L, const Vec3* v,
                                  const float* vf, const Vec3* grad_sum, const Vec3* wall_gradient,
-                                 const double* flux, double* rate) {
-  ratesRange<Lanes4>(i0, i1, L, v, vf, grad_sum, wall_gradient, flux, rate);
+                                 const double* flux, double* rate, const RowSums& sums) {
+  ratesRange<Lanes4, kSums>(i0, i1, L, v, vf, grad_sum, wall_gradient, flux, rate, sums);
 }
 WAKE_TARGET_AVX void impulseRange4(std::int64_t i0, std::int64_t i1, const RowView& L,
                                    const double* ds, const Vec3* grad_sum, const std::uint8_t* near,
@@ -465,7 +439,9 @@ template <class RangeF>
 void DivergenceFreeSolver::forEachRow(const PairLists& pairs, RangeF&& range) {
   forEachRange(pairs, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
     const Lists& L = lists_[r];
-    range(i0, i1, RowView{L.offset.data(), L.index.data(), L.gx.data(), L.gy.data(), L.gz.data()});
+    range(i0, i1,
+          RowView{L.offset.data(), L.index.data(), L.gx.data(), L.gy.data(), L.gz.data(),
+                  L.size.data()});
   });
 }
 
@@ -487,13 +463,36 @@ void DivergenceFreeSolver::densityRates(const Fluid& fluid) {
         vf[4 * i + c] = c < 3 ? static_cast<float>(v[i][c]) : 0.0f;
     floats_fresh_ = true;
   }
-  auto range = ratesRange<Quad2>;
+  const bool first = !factors_ready_;
+  auto range = first ? ratesRange<Quad2, true> : ratesRange<Quad2, false>;
 #if defined(WAKE_HAS_LANES4)
-  if (fluid.wideLanes()) range = ratesRange4;
+  if (fluid.wideLanes()) range = first ? ratesRange4<true> : ratesRange4<false>;
 #endif
+  const RowSums sums{grad_sum_.data(), weight_.data(), count_.data()};
   forEachRow(fluid.neighbors(), [&](std::int64_t i0, std::int64_t i1, const RowView& L) {
-    range(i0, i1, L, v, vf, grad_sum_.data(), wall, flux, rate_.data());
+    range(i0, i1, L, v, vf, grad_sum_.data(), wall, flux, rate_.data(), sums);
   });
+  if (first) computeFactors();
+}
+
+void DivergenceFreeSolver::computeFactors() {
+  const std::int64_t n = static_cast<std::int64_t>(factor_.size());
+  const SolverBoundary* b = boundary_;
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i) {
+    // s_a's own push: -s_a (sum_b g_ab + 3/2 G_a) (its own half of s^w_a); the change of
+    // D_a it makes: -s_a [(sum_b g_ab + G_a) . (sum_b g_ab + 3/2 G_a) + sum_b |g_ab|^2].
+    const Vec3 wall = b ? b->gradient[i] : Vec3(Vec3::Zero());
+    const Vec3 g = grad_sum_[i] + wall;
+    const double denominator = std::max(g.dot(g + 0.5 * wall), 0.0) + weight_[i];
+    // A particle with (almost) no neighbours has no pressure to find.
+    factor_[i] = denominator > factor_floor_ ? 1.0 / denominator : 0.0;
+    const std::uint32_t around = count_[i] + (b ? b->neighbors[i] : 0u);
+    sparse_[i] = around < enough_neighbors_;
+    // The fluid around a, a itself weighing as much as its neighbours together.
+    centre_[i] = weight_[i] > 0.0 ? Vec3(0.5 / weight_[i] * offset_[i]) : Vec3(Vec3::Zero());
+  }
+  factors_ready_ = true;
 }
 
 void DivergenceFreeSolver::applyImpulse(Fluid& fluid) {
@@ -536,6 +535,8 @@ int DivergenceFreeSolver::solveDivergence(Fluid& fluid, double dt) {
   stats_.divergence_error = 0.0;
   if (n == 0 || params_.max_divergence_iterations <= 0) return 0;
   if (factor_.size() != n) throw std::logic_error("DivergenceFreeSolver: solve before prepare");
+  densityRates(fluid);  // the step's first: also the factors, sparse_ among them
+  rates_fresh_ = true;  // rate_: of the velocities the solve leaves
   // The error is averaged over the particles the solve takes part in.
   std::size_t dense = 0;
   for (std::size_t i = 0; i < n; ++i)
@@ -545,8 +546,8 @@ int DivergenceFreeSolver::solveDivergence(Fluid& fluid, double dt) {
   s_.assign(n, 0.0);
   ds_.resize(n);
   int iterations = 0;
-  for (;;) {
-    densityRates(fluid);
+  for (bool first = true;; first = false) {
+    if (!first) densityRates(fluid);
     // Each particle's pressure grows by what removes its own compression rate; a particle
     // with too few neighbours for a reliable rate (a splash) is left alone.
     const double error = scale * chunkedSum(n, [&](std::size_t i) {
@@ -560,7 +561,6 @@ int DivergenceFreeSolver::solveDivergence(Fluid& fluid, double dt) {
     applyImpulse(fluid);
     ++iterations;
   }
-  rates_fresh_ = true;  // rate_: of the velocities the solve leaves
   stats_.divergence_iterations = iterations;
   return iterations;
 }

@@ -102,15 +102,6 @@ struct SolverBoundary {
   std::vector<double> above_share;
 };
 
-/// Sums of one particle while DivergenceFreeSolver::prepare finds its factor: sum_b g_ab
-/// and sum_b |g_ab|^2.
-struct DfsphGradientSums {
-  Vec3 g = Vec3::Zero();
-  double sq = 0.0;
-  std::uint32_t count = 0;     ///< fluid neighbours
-  Vec3 offset = Vec3::Zero();  ///< sum_b |g_ab|^2 (x_b - x_a)
-};
-
 class DivergenceFreeSolver {
  public:
   /// s: the time over which the state's pressure_mean follows the pressure (each step
@@ -173,18 +164,19 @@ class DivergenceFreeSolver {
     std::vector<double> scratch;  ///< one row's gradients as they are computed
     std::vector<double> kernel;   ///< one row's kernel values (with the density)
   };
-  /// Builds range r's lists (and each particle's gradient sums: see prepare()); with
-  /// `density` not null, the fluid's summation density of the range's particles into it.
-  template <class Sums>
+  /// Builds range r's lists; with `density` not null, the fluid's summation density of the
+  /// range's particles into it.
   void buildLists(const PairLists& pairs, std::size_t r, const Vec3* x,
-                  const CubicSplineKernel& kernel, double mass, bool wide, double* density,
-                  Sums* sums);
-  /// Every range's lists and the gradient sums (sums_), and the density where not null.
+                  const CubicSplineKernel& kernel, double mass, bool wide, double* density);
+  /// Every range's lists, and the density where not null.
   void buildAllLists(const Fluid& fluid, double* density);
+  /// factor_, sparse_ and centre_ from the gradient sums of the step's first rates.
+  void computeFactors();
   /// range(i0, i1, view) for every range of particles [i0, i1) and its lists, in parallel.
   template <class RangeF>
   void forEachRow(const PairLists& pairs, RangeF&& range);
-  /// D_a (rate of change of density) of every particle into rate_.
+  /// D_a (rate of change of density) of every particle into rate_; the step's first also
+  /// sums each particle's g_ab and |g_ab|^2 (grad_sum_, weight_) and finds the factors.
   void densityRates(const Fluid& fluid);
   /// Applies the increments ds_ (s per particle) to the velocities (and velocity_f_) and to
   /// s_, wall_impulse_.
@@ -207,9 +199,13 @@ class DivergenceFreeSolver {
   std::vector<Vec3> grad_sum_;                ///< (n) sum_b g_ab (kg/m^4)
   std::vector<std::uint8_t> sparse_;          ///< (n) too few neighbours for the divergence solve
   std::vector<std::uint8_t> near_wall_;       ///< (n) G_a != 0: samples in a's support
-  std::vector<DfsphGradientSums> sums_;       ///< (n) scratch of prepare()
-  std::vector<double> weight_;                ///< (n) sum_b w_ab (with a boundary)
+  std::vector<double> weight_;                ///< (n) sum_b w_ab = sum_b |g_ab|^2
+  std::vector<std::uint32_t> count_;          ///< (n) fluid neighbours
+  std::vector<Vec3> offset_;                  ///< (n) sum_b w_ab (x_b - x_a) (near walls)
   std::vector<Vec3> centre_;                  ///< (n) c_a (m, with a boundary)
+  bool factors_ready_ = false;                ///< the step's first rates found the factors
+  double factor_floor_ = 0.0;                 ///< a_a's denominator below this: no pressure
+  std::uint32_t enough_neighbors_ = 0;        ///< fewer (fluid and walls): sparse_
   std::vector<double> rate_;                  ///< (n) D_a
   std::vector<float> velocity_f_;             ///< (4 n) the velocities as floats
   bool floats_fresh_ = false;                 ///< velocity_f_ is of the velocities as they are
