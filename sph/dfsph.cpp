@@ -26,6 +26,17 @@ int latticeNeighbors(const FluidParams& f) {
   return count - 1;
 }
 
+/// The largest |g_ab| = m |grad W| of any pair (m times the kernel's steepest slope).
+double largestGradient(const CubicSplineKernel& kernel, double mass) {
+  double most = 0.0;
+  const int samples = 2000;
+  for (int k = 1; k < samples; ++k) {
+    const double r = kernel.supportRadius() * k / samples;
+    most = std::max(most, std::abs(kernel.derivativeOverR(r)) * r);
+  }
+  return mass * most;
+}
+
 /// g_ab = m grad_a W(x_a - x_b) of a's neighbours nb[0 .. count) into g[3 t + c], several
 /// at a time in L (Lanes2, Lanes4: per lane the scalar operations, the same bits), and
 /// W'(r) / r into d[t]; where w is not null, W(|x_a - x_b|) into w[t] (the distance as
@@ -290,6 +301,7 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
   weight_.resize(n);
   centre_.resize(n);
   count_.resize(n);
+  weight_floor_.resize(n);
   const CubicSplineKernel& kernel = fluid.kernel();
   const double h = kernel.smoothingLength();
   const double scale = fluid.particleMass() * std::abs(kernel.derivativeOverR(h)) * h;
@@ -298,6 +310,7 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
   // whose rate of compression says little (SPlisHSPlasH's 20 of ~26 at this support).
   enough_neighbors_ =
       static_cast<std::uint32_t>(std::ceil(0.75 * latticeNeighbors(fluid.params())));
+  largest_gradient_ = largestGradient(kernel, fluid.particleMass());
   wall_impulse_.assign(n, 0.0);  // a new step
   lift_.assign(n, 0.0);
   rates_fresh_ = false;
@@ -369,6 +382,9 @@ struct ImpulseTargets {
   double* wall_impulse;
   const double* weight;       ///< sum_b |g_ab|^2
   const Vec3* wall_gradient;  ///< G_a (read where near[a])
+  /// (n) The least weight the mean around a is taken over (near walls): a particle with
+  /// less fluid around it makes up the rest with its own increment.
+  const double* weight_floor;
 };
 
 /// The velocity change of the particles [i0, i1) for the increments ds, applied as each
@@ -404,8 +420,11 @@ inline void impulseRange(std::int64_t i0, std::int64_t i1, const RowView& L, con
     }
     Vec3 change = -ds[i] * grad_sum[i] - Vec3(sx.total(), sy.total(), sz.total());
     if (near[i]) {
-      // s_a + s^w_a: a's own and the mean of the fluid's around it.
-      const double around = to.weight[i] > 0.0 ? sw.total() / to.weight[i] : ds[i];
+      // s_a + s^w_a: a's own and the mean of the fluid's around it, over at least
+      // weight_floor (see DivergenceFreeSolver::computeFactors).
+      const double w = to.weight[i], floor = to.weight_floor[i];
+      const double around =
+          w >= floor && w > 0.0 ? sw.total() / w : (sw.total() + (floor - w) * ds[i]) / floor;
       const double wall = 1.5 * ds[i] + 0.5 * around;
       change -= wall * to.wall_gradient[i];
       to.wall_impulse[i] += wall;
@@ -491,6 +510,17 @@ void DivergenceFreeSolver::computeFactors() {
     sparse_[i] = around < enough_neighbors_;
     // The fluid around a, a itself weighing as much as its neighbours together.
     centre_[i] = weight_[i] > 0.0 ? Vec3(0.5 / weight_[i] * offset_[i]) : Vec3(Vec3::Zero());
+    // The walls' pressure s^w_a takes the mean increment of the fluid around a over at
+    // least |G_a| max|g_ab|, a's own increment making up what is missing. Over a's own
+    // weight alone, a particle with one or two fluid neighbours beside a wall passed their
+    // whole increment to its walls' push, and that push, through a large G_a, fed the
+    // neighbour's rate back: with a neighbour held by little else (a large a_b), the gain
+    // of that loop, up to 0.5 |G_a| |g_ab| w_ab / (weight |g_ab|^2), exceeded one and the
+    // divergence solve diverged (1e35 m/s in 100 iterations: boxes jammed in a narrow
+    // tank under a plate, time.cfl 0.6, max_dt 4 ms). With the floor the gain stays under
+    // 1/2; a particle with half a support of fluid around it, at a wall, is well above it
+    // (a water column at rest: the same bits).
+    weight_floor_[i] = b ? b->gradient[i].norm() * largest_gradient_ : 0.0;
   }
   factors_ready_ = true;
 }
@@ -501,9 +531,10 @@ void DivergenceFreeSolver::applyImpulse(Fluid& fluid) {
 #if defined(WAKE_HAS_LANES4)
   if (fluid.wideLanes()) range = impulseRange4;
 #endif
-  const ImpulseTargets to{st.velocity.data(), velocity_f_.data(),
-                          s_.data(),          wall_impulse_.data(),
-                          weight_.data(),     boundary_ ? boundary_->gradient.data() : nullptr};
+  const ImpulseTargets to{st.velocity.data(),  velocity_f_.data(),
+                          s_.data(),           wall_impulse_.data(),
+                          weight_.data(),      boundary_ ? boundary_->gradient.data() : nullptr,
+                          weight_floor_.data()};
   forEachRow(fluid.neighbors(), [&](std::int64_t i0, std::int64_t i1, const RowView& L) {
     range(i0, i1, L, ds_.data(), grad_sum_.data(), near_wall_.data(), to);
   });

@@ -206,6 +206,8 @@ class DivergenceFreeSolver {
   bool factors_ready_ = false;                ///< the step's first rates found the factors
   double factor_floor_ = 0.0;                 ///< a_a's denominator below this: no pressure
   std::uint32_t enough_neighbors_ = 0;        ///< fewer (fluid and walls): sparse_
+  std::vector<double> weight_floor_;          ///< (n) the least weight of s^w_a's mean
+  double largest_gradient_ = 0.0;             ///< max |g_ab| (kg/m^4)
   std::vector<double> rate_;                  ///< (n) D_a
   std::vector<float> velocity_f_;             ///< (4 n) the velocities as floats
   bool floats_fresh_ = false;                 ///< velocity_f_ is of the velocities as they are
