@@ -7,9 +7,10 @@
 # compression, the worst step's average, the largest single density ratio) and whether
 # any fluid entered a body.
 #
-#   bench/solvers.sh [BUILD_DIR] [SIM_TIME] [THREADS] [SCENE.json...]
+#   [DFSPH_MAX_DT=DT] bench/solvers.sh [BUILD_DIR] [SIM_TIME] [THREADS] [SCENE.json...]
 #
-# Defaults: build, 0.2 s, 2 threads, the scenes below. Time it on a quiet machine (no
+# Defaults: build, 0.2 s, 2 threads, the scenes below; DFSPH_MAX_DT (s) is the
+# divergence-free runs' max_dt (wake_bench_solvers --dfsph-max-dt; its own default if unset). Time it on a quiet machine (no
 # builds or other runs beside it): about 10 minutes with the defaults.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -29,7 +30,9 @@ bench="$build/bench/wake_bench_solvers"
 echo "| scene | solver | fluid particles | steps | wall s per simulated s | ns/particle/step | iterations per step (density + divergence) | avg density error | worst step | largest density ratio | fluid in a body |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|"
 for scene in "${scenes[@]}"; do
-  out=$("$bench" --scene "$scene" --sim-time "$sim_time" --threads "$threads")
+  extra=()
+  if [ -n "${DFSPH_MAX_DT:-}" ]; then extra=(--dfsph-max-dt "$DFSPH_MAX_DT"); fi
+  out=$("$bench" --scene "$scene" --sim-time "$sim_time" --threads "$threads" "${extra[@]}")
   echo "$out" | awk -v scene="$(basename "$scene" .json)" '
     $1 == "wcsph" || $1 == "dfsph" {
       its = ($1 == "dfsph") ? sprintf("%.2f + %.2f", $7, $8) : ""
