@@ -18,7 +18,10 @@
 // the particle's own pressure alone (s^w_a = s_a) left a particle pressed against a wall
 // by its neighbours with no push back whenever its own density was low (a wall layer, a
 // tank's edges): the fluid's pressure drove it into the wall each step, the velocity
-// control stopped it there, and a column at rest kept moving at 0.03-0.05 m/s.
+// control stopped it there, and a column at rest kept moving at 0.03-0.05 m/s. The mean
+// is taken over at least |G_a| max|g_ab| (s_a making up what is missing): over a's own
+// weight alone, one fluid neighbour beside a wall fed its increment through a's walls back
+// into its own rate, and the solve diverged (DivergenceFreeSolver::computeFactors).
 // Its own s_a changes D_a by about -s_a / a_a, with the factor
 //   a_a = 1 / ((sum_b g_ab + G_a) . (sum_b g_ab + 3/2 G_a) + sum_b |g_ab|^2).
 // Each iteration raises s_a by what removes particle a's own compression (never lowers it:
@@ -48,11 +51,14 @@
 // wallImpulse() and wallLift() give it per particle for the coupling
 // (Boundaries::addSolverReaction, with SolverBoundary::above_share).
 //
-// prepare() stores each particle's whole neighbour list with its pairs' g_ab (floats; a
-// pair is computed once and stored in both lists), so that the iterations only read: each
-// particle's sums over its own list, four pairs at a time in four partial sums fixed by
-// the list (AVX where the CPU has it, two SSE2 lanes twice where not: the same bits), the
-// error norms in fixed chunks: the same bits on any number of threads.
+// prepareLists() stores each particle's whole neighbour list with its pairs' g_ab (floats;
+// a pair is computed once and stored in both lists), summing the fluid's densities in the
+// same pass and keeping each pair's W'(r) / r for the viscous forces, so that the
+// iterations only read: each particle's sums over its own list, four pairs at a time in
+// four partial sums fixed by the list (AVX where the CPU has it, two SSE2 lanes twice where
+// not: the same bits), the error norms in fixed chunks: the same bits on any number of
+// threads. The step's first rates also sum each particle's g_ab and |g_ab|^2 (the factors'
+// inputs), and an iteration's impulse is applied to each particle as the pass reaches it.
 #pragma once
 
 #include "sph/fluid.hpp"
