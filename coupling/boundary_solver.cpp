@@ -47,6 +47,8 @@ void Boundaries::solverTerms(const Fluid& fluid, const BodyPlacement& at, const 
   const double deep = rho0 * gravity.norm() * kernel_.supportRadius();
   const std::size_t chunks = (n + kChunk - 1) / kChunk;
   const Vec3 zero = Vec3::Zero();
+  // The links to the bodies the pressure moves, per chunk, then in chunk order.
+  std::vector<std::vector<BodyLink>> chunk_links(chunks);
 #pragma omp parallel for schedule(static)
   for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
     const std::size_t end = std::min(n, (c + 1) * kChunk);
@@ -73,13 +75,33 @@ void Boundaries::solverTerms(const Fluid& fluid, const BodyPlacement& at, const 
             const Vec3 p = rt * (xi - f.pose.position);
             // The samples' velocity in the set's frame: v_c + omega x x_k, both turned.
             const Vec3 g_set = rt * gravity;
-            Vec3 h_set = Vec3::Zero();
+            Vec3 h_set = Vec3::Zero(), moment = Vec3::Zero(), h_moment = Vec3::Zero();
+            const bool moved = bodies_[m.body].settings.twoWay();
             extras.flux = &b;
             extras.gravity = &g_set;
             extras.hydrostatic = &h_set;
-            g += f.rotation * gradientSum(m.samples, p, near, count, rt * f.linear_velocity,
-                                          rt * f.angular_velocity, extras);
+            if (moved) {
+              extras.moment = &moment;
+              extras.hydrostatic_moment = &h_moment;
+            }
+            const Vec3 g_body =
+                f.rotation * gradientSum(m.samples, p, near, count, rt * f.linear_velocity,
+                                         rt * f.angular_velocity, extras);
+            g += g_body;
             h += f.rotation * h_set;
+            if (!moved) return;
+            BodyLink link;
+            link.particle = static_cast<std::uint32_t>(i);
+            link.body = static_cast<std::uint32_t>(m.body);
+            const Vec3 gw = rho0 * g_body, mw = rho0 * (f.rotation * moment);
+            const Vec3 hw = f.rotation * h_set, hm = f.rotation * h_moment;
+            for (int k = 0; k < 3; ++k) {
+              link.flux[k] = gw[k];
+              link.flux[3 + k] = mw[k];
+              link.hydrostatic[k] = hw[k];
+              link.hydrostatic[3 + k] = hm[k];
+            }
+            chunk_links[c].push_back(link);
           });
       out.gradient[i] = rho0 * g;
       out.flux[i] = rho0 * b;
@@ -88,6 +110,9 @@ void Boundaries::solverTerms(const Fluid& fluid, const BodyPlacement& at, const 
       out.above_share[i] = chi;
     }
   }
+  out.links.clear();
+  for (const std::vector<BodyLink>& links : chunk_links)
+    out.links.insert(out.links.end(), links.begin(), links.end());
 }
 
 void Boundaries::addSolverReaction(const Fluid& fluid, const BodyPlacement& at,

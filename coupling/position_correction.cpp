@@ -74,18 +74,24 @@ bool escape(const Boundaries& boundaries, const BodyPlacement& at, Vec3& x) {
     for (const Vec3& u : cubeDirections()) {
       const Vec3 y = x + (ring * step) * u;
       const Boundaries::Clearance there = boundaries.clearance(y, at);
-      const double c = there.all;
-      if (c <= now || there.walls < static_limit) continue;
+      if (there.walls < static_limit) continue;
+      // A point as deep in a wall as the particle (beside a box resting on the floor, the
+      // particle pressed into the floor under it) is a way out once lifted out of it.
+      Vec3 lifted = y;
+      const bool lifts = there.all <= now && there.all > depth_limit &&
+                         projectOut(boundaries, at, lifted, 0.5 * rf, 3);
+      const double c = lifts ? boundaries.clearance(lifted, at).all : there.all;
+      if (c <= now) continue;
       bool open = true;
       for (int k = 1; k < ring && open; ++k) {
         const Boundaries::Clearance q = boundaries.clearance(x + (k * step) * u, at);
         open = q.all >= depth_limit && q.walls >= static_limit;
       }
       if (!open) continue;
-      if (c > progress) progress = c, farthest = y;
+      if (c > progress) progress = c, farthest = lifts ? lifted : y;
       if (c < rf / 16.0 || c <= best) continue;
-      Vec3 room = y;  // half a radius from every body there?
-      if (!projectOut(boundaries, at, room, 0.5 * rf, 3)) continue;
+      Vec3 room = lifts ? lifted : y;  // half a radius from every body there?
+      if (!lifts && !projectOut(boundaries, at, room, 0.5 * rf, 3)) continue;
       best = c;
       chosen = room;
     }

@@ -204,6 +204,7 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
   boundaries_->finalize();
   const BodyPlacement start = placement();
   data_.wrenches.assign(s.bodies.size(), Wrench{});
+  data_.solver_forces.assign(s.bodies.size(), Wrench{});
 
   // Fill the blocks on the lattice; drop particles outside the domain, inside a body, or
   // closer to a body's surface than their radius (starting overlap blows up runs).
@@ -422,6 +423,20 @@ void Simulation::computeFluidForces() {
     t0 = Clock::now();
     boundaries_->solverTerms(*fluid_, work_.placed, work_.wall_pairs, model_.gravity,
                              work_.solver_boundary);
+    // The two-way bodies as the solves see them: their masses now, and the density solve's
+    // push on them in the last step, which their other forces are taken to balance.
+    std::vector<SolverBody>& bodies = work_.solver_boundary.bodies;
+    bodies.assign(boundaries_->bodyCount(), SolverBody{});
+    if (!work_.solver_boundary.links.empty()) {
+      rigid_->predict(0.0, work_.body_mass);
+      for (std::size_t b = 0; b < bodies.size(); ++b) {
+        if (!boundaries_->body(b).twoWay()) continue;
+        bodies[b].inverse_mass = work_.body_mass[b].inverse_mass;
+        bodies[b].inverse_inertia = work_.body_mass[b].inverse_inertia_world;
+        bodies[b].last_force = data_.solver_forces[b].force;
+        bodies[b].last_torque = data_.solver_forces[b].torque;
+      }
+    }
     timings_.boundary += secondsSince(t0);
     t0 = Clock::now();
     dfsph_->prepare(*fluid_, work_.solver_boundary);
@@ -478,6 +493,8 @@ void Simulation::predict(double dt) {
     t0 = Clock::now();
     data_.run.solver_iterations += dfsph_->solveDensity(*fluid_, model_.gravity, dt);
     timings_.solver += secondsSince(t0);
+    for (std::size_t b = 0; b < dfsph_->bodyForces().size(); ++b)
+      data_.solver_forces[b] = Wrench{dfsph_->bodyForces()[b], dfsph_->bodyTorques()[b]};
     fluid_->predictPositions(dt);
     timings_.forces += secondsSince(t0);
     t0 = Clock::now();
@@ -589,7 +606,14 @@ void Simulation::restoreState(const SimulationState& s) {
   require(std::isfinite(s.run.time) && s.run.time >= 0, "state.run.time",
           "must be finite and >= 0");
   rigid_->loadState(s.rigid);
+  require(s.solver_forces.empty() || s.solver_forces.size() == s.wrenches.size(),
+          "state.solver_forces",
+          "has " + std::to_string(s.solver_forces.size()) + " bodies, the simulation " +
+              std::to_string(data_.wrenches.size()));
   data_ = static_cast<const RunData&>(s);  // fluid_ steps data_.fluid
+  // A checkpoint written before the solver's body forces were kept: none (the solve's
+  // first step after it sees the bodies as a first step does).
+  if (data_.solver_forces.empty()) data_.solver_forces.assign(data_.wrenches.size(), Wrench{});
   fluid_->restoreNeighborReference(s.neighbor_reference, s.neighbor_reference_id);
   failure_.reset();
 }

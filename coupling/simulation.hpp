@@ -150,6 +150,9 @@ struct RunData {
   RunCounters run;
   FluidState fluid;              ///< every per-particle array
   std::vector<Wrench> wrenches;  ///< (bodies) the fluid's wrench in the last step
+  /// (bodies) The divergence-free density solve's pressure force on each two-way body in the
+  /// last step (part of `wrenches`; zero otherwise): DivergenceFreeSolver::bodyForces.
+  std::vector<Wrench> solver_forces;
 };
 
 /// Everything of a run that changes from step to step (what a checkpoint holds): the run's
@@ -328,6 +331,7 @@ class Simulation {
     std::vector<Wrench> wall_reaction;             // (bodies) its reaction on two-way bodies
     SamplePressure sample_pressure;                // the boundary samples' pressure
     WallPairs wall_pairs;                          // the step's (particle, sample) pairs
+    std::vector<RigidPrediction> body_mass;        // Dfsph: the bodies' masses now (a zero step)
     SolverBoundary solver_boundary;  // Dfsph: the walls' and bodies' terms of the solves
     BodyPlacement placed;  // the bodies placed for the current stage (now, predicted, final)
   } work_;

@@ -312,6 +312,7 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
       static_cast<std::uint32_t>(std::ceil(0.75 * latticeNeighbors(fluid.params())));
   largest_gradient_ = largestGradient(kernel, fluid.particleMass());
   wall_impulse_.assign(n, 0.0);  // a new step
+  bodies_ready_ = false;
   lift_.assign(n, 0.0);
   rates_fresh_ = false;
 }
@@ -559,6 +560,84 @@ void DivergenceFreeSolver::applyHydrostatic(Fluid& fluid, const Vec3& gravity, d
   floats_fresh_ = false;
 }
 
+void DivergenceFreeSolver::prepareBodies(const Fluid& fluid) {
+  const SolverBoundary& b = *boundary_;
+  const std::size_t nb = b.bodies.size(), nl = b.links.size();
+  const double mass = fluid.particleMass();
+  std::vector<Mat6> stiffness(nb, Mat6::Zero());
+  for (std::size_t l = 0; l < nl; ++l) {
+    const BodyLink& link = b.links[l];
+    if (link.body >= nb || link.particle >= factor_.size())
+      throw std::logic_error("DivergenceFreeSolver: a body link out of range");
+    const Eigen::Map<const Vec6> j(link.flux);
+    // A particle's increment ds pushes the body by about 2 m ds J (its own 3/2 and half
+    // the mean of its neighbours' at the walls) and, as the body answers, changes its
+    // own increment by -a_a J . (the body's change): S = sum 2 m a_a J J^T.
+    stiffness[link.body] += (2.0 * mass * factor_[link.particle]) * (j * j.transpose());
+  }
+  response_.resize(nb);
+  impulse_.assign(nb, Vec6::Zero());
+  divergence_impulse_.assign(nb, Vec6::Zero());
+  seen_.assign(nb, Vec6::Zero());
+  answer_.resize(nb);
+  for (std::size_t k = 0; k < nb; ++k) {
+    Mat6 inverse = Mat6::Zero();
+    inverse.topLeftCorner<3, 3>() = b.bodies[k].inverse_mass * Eigen::Matrix3d::Identity();
+    inverse.bottomRightCorner<3, 3>() = b.bodies[k].inverse_inertia;
+    response_[k] = (Mat6::Identity() + inverse * stiffness[k]).partialPivLu().solve(inverse);
+  }
+  bodies_ready_ = true;
+}
+
+void DivergenceFreeSolver::seeBodies(const Fluid& fluid, double dt, bool density) {
+  const SolverBoundary& b = *boundary_;
+  const std::size_t nb = b.bodies.size(), nl = b.links.size();
+  const double mass = fluid.particleMass();
+  const double inv_rho0 = 1.0 / fluid.params().rest_density;
+  for (Vec6& i : impulse_)
+    i.setZero();
+  // In link order: the same bits on any number of threads.
+  for (std::size_t l = 0; l < nl; ++l) {
+    const BodyLink& link = b.links[l];
+    const std::uint32_t a = link.particle;
+    const Eigen::Map<const Vec6> j(link.flux), h(link.hydrostatic);
+    if (density)
+      impulse_[link.body] +=
+          (mass * (wall_impulse_[a] + dt * lift_[a] * inv_rho0)) * j + (mass * dt) * h;
+    else
+      impulse_[link.body] += (mass * wall_impulse_[a]) * j;
+  }
+  // The density solve's push is taken against the last step's: the body's other forces
+  // (gravity, contacts) are taken to balance that one.
+  const double last = density ? dt : 0.0;
+  for (std::size_t k = 0; k < nb; ++k) {
+    const SolverBody& body = b.bodies[k];
+    const Vec6& i = impulse_[k];
+    seen_[k].head<3>() = body.inverse_mass * (i.head<3>() - last * body.last_force);
+    seen_[k].tail<3>() = body.inverse_inertia * (i.tail<3>() - last * body.last_torque);
+  }
+}
+
+void DivergenceFreeSolver::ratesWithBodies() {
+  for (const BodyLink& link : boundary_->links)
+    rate_[link.particle] -= Eigen::Map<const Vec6>(link.flux).dot(seen_[link.body]);
+}
+
+void DivergenceFreeSolver::shareWithBodies(double mass) {
+  const std::vector<BodyLink>& links = boundary_->links;
+  for (Vec6& y : answer_)
+    y.setZero();
+  for (const BodyLink& link : links)
+    answer_[link.body] += (2.0 * mass * ds_[link.particle]) * Eigen::Map<const Vec6>(link.flux);
+  for (std::size_t k = 0; k < answer_.size(); ++k)
+    answer_[k] = response_[k] * answer_[k];
+  for (const BodyLink& link : links)
+    ds_[link.particle] -=
+        factor_[link.particle] * Eigen::Map<const Vec6>(link.flux).dot(answer_[link.body]);
+  for (const BodyLink& link : links)
+    ds_[link.particle] = std::max(ds_[link.particle], -s_[link.particle]);
+}
+
 int DivergenceFreeSolver::solveDivergence(Fluid& fluid, double dt) {
   floats_fresh_ = false;  // the velocities changed since the last solve
   const std::size_t n = fluid.state().size();
@@ -576,9 +655,12 @@ int DivergenceFreeSolver::solveDivergence(Fluid& fluid, double dt) {
   const double scale = dt / (double(dense) * fluid.params().rest_density);
   s_.assign(n, 0.0);
   ds_.resize(n);
+  const bool bodies = boundary_ && !boundary_->links.empty();
+  if (bodies) prepareBodies(fluid);
   int iterations = 0;
   for (bool first = true;; first = false) {
     if (!first) densityRates(fluid);
+    if (bodies) ratesWithBodies();
     // Each particle's pressure grows by what removes its own compression rate; a particle
     // with too few neighbours for a reliable rate (a splash) is left alone.
     const double error = scale * chunkedSum(n, [&](std::size_t i) {
@@ -589,9 +671,12 @@ int DivergenceFreeSolver::solveDivergence(Fluid& fluid, double dt) {
     stats_.divergence_error = error;
     if (error <= params_.max_divergence_error || iterations >= params_.max_divergence_iterations)
       break;
+    if (bodies) shareWithBodies(fluid.particleMass());
     applyImpulse(fluid);
+    if (bodies) seeBodies(fluid, dt, false);
     ++iterations;
   }
+  if (bodies) divergence_impulse_ = impulse_;
   stats_.divergence_iterations = iterations;
   return iterations;
 }
@@ -614,6 +699,8 @@ int DivergenceFreeSolver::solveDensity(Fluid& fluid, const Vec3& gravity, double
   // rates); the iterations only add pressure, so this is how it falls.
   if (!rates_fresh_) densityRates(fluid);
   rates_fresh_ = false;
+  const bool bodies = boundary_ && !boundary_->links.empty();
+  if (bodies && !bodies_ready_) prepareBodies(fluid);
   const double any = chunkedSum(n, [&](std::size_t i) {
     const double rho = st.density[i];
     const bool compressed = rho + dt * rate_[i] > rho0;
@@ -622,10 +709,12 @@ int DivergenceFreeSolver::solveDensity(Fluid& fluid, const Vec3& gravity, double
   });
   if (any > 0.0) applyImpulse(fluid);
   applyHydrostatic(fluid, gravity, dt);
+  if (bodies) seeBodies(fluid, dt, true);
   const double scale = 1.0 / (double(n) * rho0);
   int iterations = 0;
   for (;;) {
     densityRates(fluid);
+    if (bodies) ratesWithBodies();
     // Each particle's pressure grows by what removes its own compression at the step's end.
     const double error = scale * chunkedSum(n, [&](std::size_t i) {
                            const double excess =
@@ -637,8 +726,18 @@ int DivergenceFreeSolver::solveDensity(Fluid& fluid, const Vec3& gravity, double
     if ((error <= params_.max_density_error && iterations >= 2) ||
         iterations >= params_.max_iterations)
       break;
+    if (bodies) shareWithBodies(fluid.particleMass());
     applyImpulse(fluid);
+    if (bodies) seeBodies(fluid, dt, true);
     ++iterations;
+  }
+  const std::size_t nb = bodies ? boundary_->bodies.size() : 0;
+  body_force_.assign(nb, Vec3::Zero());
+  body_torque_.assign(nb, Vec3::Zero());
+  for (std::size_t b = 0; b < nb; ++b) {
+    const Vec6 push = impulse_[b] - divergence_impulse_[b];
+    body_force_[b] = push.head<3>() * inv_dt;
+    body_torque_[b] = push.tail<3>() * inv_dt;
   }
   const std::int64_t sn = static_cast<std::int64_t>(n);
   const double follow = dt / (kPressureMeanTime + dt);

@@ -51,6 +51,24 @@
 // wallImpulse() and wallLift() give it per particle for the coupling
 // (Boundaries::addSolverReaction, with SolverBoundary::above_share).
 //
+// The bodies that push moves (dynamic two-way bodies) move in the solves as it pushes them.
+// With J_a = (G^b_a; rho0 sum_k V_k r_k x grad_a W_ak) over body b's samples (BodyLink), a
+// change (u, omega) of b's velocity changes B_a by J_a . (u; omega), and the solves' push on
+// b so far is I_b = sum_a m (wall impulse of a) J_a (plus the hydrostatic part in the
+// density solve). The rates see b moving at its velocity plus M_b^-1 (I_b - dt F_b), F_b the
+// density solve's push in the last step (SolverBody::last_force): the body's other forces
+// (gravity, its contacts) are taken to balance what the fluid last pushed with; the
+// divergence solve's push counts whole. Held at its velocity, a light body boxed in by
+// walls (a box jammed across a narrow tank) rocked: the pressure that stopped it in one
+// step threw it back in the next, each push the opposite of the last and larger (the
+// added mass of the fluid it must move, several times its own, in an explicit coupling).
+// Each iteration takes out of the increments what the body's answer to them does: with y_b
+// = sum_a 2 m ds_a J_a (the push of the increments), the body's change is d_b = (M_b +
+// S_b)^-1 y_b, S_b = sum_a 2 m a_a J_a J_a^T, and ds_a -= a_a J_a . d_b (never below -s_a):
+// the Jacobi step preconditioned by the diagonal plus the body's rank-6 part (Woodbury),
+// which converges wherever the solve without bodies does; Jacobi with the body's part
+// left to the rates overshoots when S_b exceeds twice the body's mass.
+//
 // prepareLists() stores each particle's whole neighbour list with its pairs' g_ab (floats;
 // a pair is computed once and stored in both lists), summing the fluid's densities in the
 // same pass and keeping each pair's W'(r) / r for the viscous forces, so that the
@@ -94,6 +112,30 @@ struct DfsphStats {
   double divergence_error = 0;  ///< the divergence solve's last average error (fraction)
 };
 
+/// A particle's link to a body that the fluid's pressure moves (a dynamic two-way body),
+/// for the density solve's view of that body (see SolverBoundary::links).
+struct BodyLink {
+  std::uint32_t particle = 0;
+  std::uint32_t body = 0;  ///< index into SolverBoundary::bodies
+  /// (G^b_a; rho0 sum_k V_k r_k x grad_a W_ak) over the body's samples k (r_k from its centre
+  /// of mass, world): the change of B_a for a change (u, omega) of the body's velocity is
+  /// the dot product with (u; omega); the body's push from particle a's walls' pressure s^w
+  /// is m s^w times it.
+  double flux[6] = {0, 0, 0, 0, 0, 0};
+  /// The body's part of H_a with its moment (m/s^2, m^2/s^2).
+  double hydrostatic[6] = {0, 0, 0, 0, 0, 0};
+};
+
+/// A body the fluid's pressure moves, as the density solve sees it.
+struct SolverBody {
+  /// The inverse of its 6 x 6 mass matrix (1/kg, then the world inverse inertia).
+  double inverse_mass = 0.0;
+  Eigen::Matrix3d inverse_inertia = Eigen::Matrix3d::Zero();
+  /// The density solve's pressure force and torque on it in the last step (N, N m):
+  /// what the other forces on it are taken to balance in this one.
+  Vec3 last_force = Vec3::Zero(), last_torque = Vec3::Zero();
+};
+
 /// The walls' and bodies' part of the solves, per fluid particle (all empty: no boundary;
 /// Boundaries::solverTerms fills them).
 struct SolverBoundary {
@@ -106,6 +148,10 @@ struct SolverBoundary {
   /// (n) chi_a in [0, 1]: a's mean pressure (the state's pressure_mean; its pressure before
   /// the first solve keeps one) over the weight of a support's height of fluid.
   std::vector<double> above_share;
+  /// The links of the particles near bodies the pressure moves, in particle order (empty:
+  /// the bodies are held at their velocities in B_a through the solves).
+  std::vector<BodyLink> links;
+  std::vector<SolverBody> bodies;  ///< those bodies (BodyLink::body)
 };
 
 class DivergenceFreeSolver {
@@ -150,6 +196,12 @@ class DivergenceFreeSolver {
   /// -dt (H_a + wallLift[a] G_a / rho0).
   const std::vector<double>& wallLift() const { return lift_; }
 
+  /// (bodies of the step's SolverBoundary) The density solve's pressure force and torque on
+  /// each body it moves (N, N m: the push of its walls' pressure and their hydrostatic part
+  /// over the step, divided by dt): the next step's SolverBody::last_force / last_torque.
+  const std::vector<Vec3>& bodyForces() const { return body_force_; }
+  const std::vector<Vec3>& bodyTorques() const { return body_torque_; }
+
   const DfsphStats& stats() const { return stats_; }
 
   /// W'(r) / r of each pair of the fluid's pair lists as the last lists were built (for
@@ -189,6 +241,17 @@ class DivergenceFreeSolver {
   void applyImpulse(Fluid& fluid);
   /// The hydrostatic part of the walls' pressure (see above) on the velocities, into lift_.
   void applyHydrostatic(Fluid& fluid, const Vec3& gravity, double dt);
+  using Vec6 = Eigen::Matrix<double, 6, 1>;
+  using Mat6 = Eigen::Matrix<double, 6, 6>;
+  /// Each body's push in this density solve so far (impulse_), and the change of its
+  /// velocity that the fluid sees (seen_): that push less the last step's, over its mass.
+  void seeBodies(const Fluid& fluid, double dt, bool density);
+  /// link_start_, impulse_, seen_ and response_ for a density solve (after the factors).
+  void prepareBodies(const Fluid& fluid);
+  /// The bodies' seen velocities in the rates: D_a -= J^b_a . seen_b.
+  void ratesWithBodies();
+  /// The increments ds with each body's answer to them taken out (see solveDensity).
+  void shareWithBodies(double mass);
   /// sum over i of f(i), in fixed chunks (the same bits on any number of threads).
   template <class F>
   static double chunkedSum(std::size_t n, F&& f);
@@ -222,6 +285,14 @@ class DivergenceFreeSolver {
   std::vector<double> ds_;                    ///< (n) this iteration's increment of s
   std::vector<double> wall_impulse_;          ///< (n) sum of s_a + s^w_a over the step's solves
   std::vector<double> lift_;                  ///< (n) l_a of the density solve
+  // The bodies the density solve moves (SolverBoundary::links, bodies).
+  bool bodies_ready_ = false;             ///< prepareBodies ran for this step
+  std::vector<Vec6> impulse_;             ///< (bodies) the step's push so far (N s, N m s)
+  std::vector<Vec6> divergence_impulse_;  ///< (bodies) the divergence solve's part of it
+  std::vector<Vec6> seen_;                ///< (bodies) velocity change seen (m/s, rad/s)
+  std::vector<Mat6> response_;            ///< (bodies) (I + M^-1 S)^-1 M^-1
+  std::vector<Vec6> answer_;              ///< (bodies) scratch
+  std::vector<Vec3> body_force_, body_torque_;
 };
 
 }  // namespace wake

@@ -35,8 +35,10 @@ inline SimulationSettings tankScene(const Vec3& tank_size, const FluidBlock& blo
 }
 
 /// A free box in zero gravity hit by a sheet of fluid particles.
-inline Simulation sheetOnFreeBox(CouplingMethod method, double restitution, int threads = 0) {
+inline Simulation sheetOnFreeBox(CouplingMethod method, double restitution, int threads = 0,
+                                 FluidSolver solver = FluidSolver::Wcsph) {
   SimulationSettings s;
+  s.solver = solver;
   s.gravity = Vec3::Zero();
   s.fluid.particle_radius = 0.01;
   s.fluid.speed_of_sound = 20.0;

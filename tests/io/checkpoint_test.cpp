@@ -440,6 +440,12 @@ TEST(Checkpoint, TheCppApiSavesAndRestoresARunBitForBit) {
       SimulationState torn = readCheckpoint(file);
       torn.fluid.pressure_mean.pop_back();
       EXPECT_THROW(b.coupled().simulation().restoreState(torn), std::invalid_argument);
+      // The density solve's last push on each body (it sees the bodies move against it).
+      SimulationState pushes = readCheckpoint(file);
+      ASSERT_EQ(pushes.solver_forces.size(), pushes.wrenches.size());
+      EXPECT_GT(pushes.solver_forces[1].force.norm(), 0.0);
+      pushes.solver_forces.pop_back();
+      EXPECT_THROW(b.coupled().simulation().restoreState(pushes), std::invalid_argument);
     }
     EXPECT_THROW(readCheckpoint((dir.path / "none.h5").string()), std::runtime_error);
   }
