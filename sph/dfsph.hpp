@@ -65,9 +65,12 @@
 // Each iteration takes out of the increments what the body's answer to them does: with y_b
 // = sum_a 2 m ds_a J_a (the push of the increments), the body's change is d_b = (M_b +
 // S_b)^-1 y_b, S_b = sum_a 2 m a_a J_a J_a^T, and ds_a -= a_a J_a . d_b (never below -s_a):
-// the Jacobi step preconditioned by the diagonal plus the body's rank-6 part (Woodbury),
-// which converges wherever the solve without bodies does; Jacobi with the body's part
-// left to the rates overshoots when S_b exceeds twice the body's mass.
+// the Jacobi step preconditioned by the diagonal plus the body's rank-6 part (Woodbury;
+// for a symmetric system it converges wherever Jacobi without the bodies does). Jacobi
+// with the body's part left to the rates overshoots once S_b exceeds twice the body's
+// mass. In a linear model of added mass mu times the body's mass, a push answered only in
+// the next step grows by 1 - mu a step (unstable beyond mu = 2); seen within the solve
+// against the last step's push it decays by sqrt(mu / (1 + mu)) a step at any mu.
 //
 // prepareLists() stores each particle's whole neighbour list with its pairs' g_ab (floats;
 // a pair is computed once and stored in both lists), summing the fluid's densities in the
