@@ -560,31 +560,26 @@ void DivergenceFreeSolver::applyHydrostatic(Fluid& fluid, const Vec3& gravity, d
   floats_fresh_ = false;
 }
 
-void DivergenceFreeSolver::prepareBodies(const Fluid& fluid) {
+void DivergenceFreeSolver::prepareBodies() {
   const SolverBoundary& b = *boundary_;
   const std::size_t nb = b.bodies.size(), nl = b.links.size();
-  const double mass = fluid.particleMass();
-  std::vector<Mat6> stiffness(nb, Mat6::Zero());
   for (std::size_t l = 0; l < nl; ++l) {
     const BodyLink& link = b.links[l];
     if (link.body >= nb || link.particle >= factor_.size())
       throw std::logic_error("DivergenceFreeSolver: a body link out of range");
-    const Eigen::Map<const Vec6> j(link.flux);
-    // A particle's increment ds pushes the body by about 2 m ds J (its own 3/2 and half
-    // the mean of its neighbours' at the walls) and, as the body answers, changes its
-    // own increment by -a_a J . (the body's change): S = sum 2 m a_a J J^T.
-    stiffness[link.body] += (2.0 * mass * factor_[link.particle]) * (j * j.transpose());
   }
-  response_.resize(nb);
+  inverse_mass_.resize(nb);
   impulse_.assign(nb, Vec6::Zero());
   divergence_impulse_.assign(nb, Vec6::Zero());
   seen_.assign(nb, Vec6::Zero());
   answer_.resize(nb);
+  residual_.resize(nb);
+  stiffness_.resize(nb);
   for (std::size_t k = 0; k < nb; ++k) {
-    Mat6 inverse = Mat6::Zero();
+    Mat6& inverse = inverse_mass_[k];
+    inverse.setZero();
     inverse.topLeftCorner<3, 3>() = b.bodies[k].inverse_mass * Eigen::Matrix3d::Identity();
     inverse.bottomRightCorner<3, 3>() = b.bodies[k].inverse_inertia;
-    response_[k] = (Mat6::Identity() + inverse * stiffness[k]).partialPivLu().solve(inverse);
   }
   bodies_ready_ = true;
 }
@@ -612,30 +607,69 @@ void DivergenceFreeSolver::seeBodies(const Fluid& fluid, double dt, bool density
   const double last = density ? dt : 0.0;
   for (std::size_t k = 0; k < nb; ++k) {
     const SolverBody& body = b.bodies[k];
-    const Vec6& i = impulse_[k];
-    seen_[k].head<3>() = body.inverse_mass * (i.head<3>() - last * body.last_force);
-    seen_[k].tail<3>() = body.inverse_inertia * (i.tail<3>() - last * body.last_torque);
+    Vec6 push = impulse_[k];
+    push.head<3>() -= last * body.last_force;
+    push.tail<3>() -= last * body.last_torque;
+    seen_[k] = inverse_mass_[k] * push;
+  }
+}
+
+void DivergenceFreeSolver::shareWithBodies(double mass) {
+  // Find each body's change d_b with the increments ds'_a = max(ds_a - a_a sum J_a . d_b,
+  // -s_a) pushing it by exactly M_b d_b (their push taken as 2 m ds' J): piecewise linear
+  // and monotone in d, so Newton's steps with the particles not held at -s_a converge in a
+  // few (at most kShareSteps), in link order (the same bits on any number of threads).
+  const std::vector<BodyLink>& links = boundary_->links;
+  const std::size_t nb = answer_.size(), nl = links.size();
+  for (Vec6& d : answer_)
+    d.setZero();
+  for (int step = 0; step < kShareSteps; ++step) {
+    for (std::size_t k = 0; k < nb; ++k) {
+      residual_[k].setZero();
+      stiffness_[k].setZero();
+    }
+    for (std::size_t l = 0; l < nl;) {
+      // The links of one particle (consecutive).
+      const std::uint32_t a = links[l].particle;
+      std::size_t e = l;
+      double change = 0.0;
+      for (; e < nl && links[e].particle == a; ++e)
+        change += Eigen::Map<const Vec6>(links[e].flux).dot(answer_[links[e].body]);
+      const double free_ds = ds_[a] - factor_[a] * change;
+      const bool held = free_ds < -s_[a];
+      const double share = held ? -s_[a] : free_ds;
+      for (std::size_t t = l; t < e; ++t) {
+        const Eigen::Map<const Vec6> j(links[t].flux);
+        residual_[links[t].body] += (2.0 * mass * share) * j;
+        if (!held) stiffness_[links[t].body] += (2.0 * mass * factor_[a]) * (j * j.transpose());
+      }
+      l = e;
+    }
+    double worst = 0.0;
+    for (std::size_t k = 0; k < nb; ++k) {
+      // g = M^-1 push(ds') - d; dg/dd = -(I + M^-1 S_free).
+      const Vec6 g = inverse_mass_[k] * residual_[k] - answer_[k];
+      const Mat6 jacobian = Mat6::Identity() + inverse_mass_[k] * stiffness_[k];
+      const Vec6 step_d = jacobian.partialPivLu().solve(g);
+      answer_[k] += step_d;
+      worst = std::max(worst, step_d.norm() / std::max(answer_[k].norm(), 1e-12));
+    }
+    if (worst < 1e-6) break;
+  }
+  for (std::size_t l = 0; l < nl; ++l) {
+    const std::uint32_t a = links[l].particle;
+    double change = 0.0;
+    std::size_t e = l;
+    for (; e < nl && links[e].particle == a; ++e)
+      change += Eigen::Map<const Vec6>(links[e].flux).dot(answer_[links[e].body]);
+    ds_[a] = std::max(ds_[a] - factor_[a] * change, -s_[a]);
+    l = e - 1;
   }
 }
 
 void DivergenceFreeSolver::ratesWithBodies() {
   for (const BodyLink& link : boundary_->links)
     rate_[link.particle] -= Eigen::Map<const Vec6>(link.flux).dot(seen_[link.body]);
-}
-
-void DivergenceFreeSolver::shareWithBodies(double mass) {
-  const std::vector<BodyLink>& links = boundary_->links;
-  for (Vec6& y : answer_)
-    y.setZero();
-  for (const BodyLink& link : links)
-    answer_[link.body] += (2.0 * mass * ds_[link.particle]) * Eigen::Map<const Vec6>(link.flux);
-  for (std::size_t k = 0; k < answer_.size(); ++k)
-    answer_[k] = response_[k] * answer_[k];
-  for (const BodyLink& link : links)
-    ds_[link.particle] -=
-        factor_[link.particle] * Eigen::Map<const Vec6>(link.flux).dot(answer_[link.body]);
-  for (const BodyLink& link : links)
-    ds_[link.particle] = std::max(ds_[link.particle], -s_[link.particle]);
 }
 
 int DivergenceFreeSolver::solveDivergence(Fluid& fluid, double dt) {
@@ -656,7 +690,7 @@ int DivergenceFreeSolver::solveDivergence(Fluid& fluid, double dt) {
   s_.assign(n, 0.0);
   ds_.resize(n);
   const bool bodies = boundary_ && !boundary_->links.empty();
-  if (bodies) prepareBodies(fluid);
+  if (bodies) prepareBodies();
   int iterations = 0;
   for (bool first = true;; first = false) {
     if (!first) densityRates(fluid);
@@ -700,7 +734,7 @@ int DivergenceFreeSolver::solveDensity(Fluid& fluid, const Vec3& gravity, double
   if (!rates_fresh_) densityRates(fluid);
   rates_fresh_ = false;
   const bool bodies = boundary_ && !boundary_->links.empty();
-  if (bodies && !bodies_ready_) prepareBodies(fluid);
+  if (bodies && !bodies_ready_) prepareBodies();
   const double any = chunkedSum(n, [&](std::size_t i) {
     const double rho = st.density[i];
     const bool compressed = rho + dt * rate_[i] > rho0;

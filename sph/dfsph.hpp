@@ -62,15 +62,20 @@
 // walls (a box jammed across a narrow tank) rocked: the pressure that stopped it in one
 // step threw it back in the next, each push the opposite of the last and larger (the
 // added mass of the fluid it must move, several times its own, in an explicit coupling).
-// Each iteration takes out of the increments what the body's answer to them does: with y_b
-// = sum_a 2 m ds_a J_a (the push of the increments), the body's change is d_b = (M_b +
-// S_b)^-1 y_b, S_b = sum_a 2 m a_a J_a J_a^T, and ds_a -= a_a J_a . d_b (never below -s_a):
-// the Jacobi step preconditioned by the diagonal plus the body's rank-6 part (Woodbury;
-// for a symmetric system it converges wherever Jacobi without the bodies does). Jacobi
-// with the body's part left to the rates overshoots once S_b exceeds twice the body's
-// mass. In a linear model of added mass mu times the body's mass, a push answered only in
-// the next step grows by 1 - mu a step (unstable beyond mu = 2); seen within the solve
-// against the last step's push it decays by sqrt(mu / (1 + mu)) a step at any mu.
+// Each iteration takes out of the increments what the body's answer to them does: the
+// body's change d_b is the one for which the increments ds'_a = max(ds_a - a_a J_a . d_b,
+// -s_a) push it by M_b d_b (their push taken as 2 m ds' J_a: a's own 3/2 and half the mean
+// of its neighbours'); piecewise linear and monotone in d_b, found by Newton's steps with
+// S_b = sum 2 m a_a J_a J_a^T over the particles not held at -s_a (shareWithBodies). Where
+// nothing is held this is the Jacobi step preconditioned by the diagonal plus the body's
+// rank-6 part (Woodbury). Left to the rates alone, a light body overshoots each iteration
+// (all the fluid around it pushes as if it were held: S_b many times its mass) and the
+// solve diverges; with Woodbury's step but the increments cut at -s_a after it, the
+// push was more than the step allowed for, and the divergence solve, which starts from s
+// = 0, diverged beside a sphere of 0.10 the water's density. In a linear model of added
+// mass mu times the body's mass, a push answered only in the next step grows by 1 - mu a
+// step (unstable beyond mu = 2); seen within the solve against the last step's push it
+// decays by sqrt(mu / (1 + mu)) a step at any mu.
 //
 // prepareLists() stores each particle's whole neighbour list with its pairs' g_ab (floats;
 // a pair is computed once and stored in both lists), summing the fluid's densities in the
@@ -249,12 +254,13 @@ class DivergenceFreeSolver {
   /// Each body's push in this density solve so far (impulse_), and the change of its
   /// velocity that the fluid sees (seen_): that push less the last step's, over its mass.
   void seeBodies(const Fluid& fluid, double dt, bool density);
-  /// link_start_, impulse_, seen_ and response_ for a density solve (after the factors).
-  void prepareBodies(const Fluid& fluid);
+  /// impulse_, seen_, inverse_mass_ and response_ for the step's solves (after the factors).
+  void prepareBodies();
   /// The bodies' seen velocities in the rates: D_a -= J^b_a . seen_b.
   void ratesWithBodies();
-  /// The increments ds with each body's answer to them taken out (see solveDensity).
+  /// The increments ds with each body's answer to them taken out (see above).
   void shareWithBodies(double mass);
+  static constexpr int kShareSteps = 8;  ///< Newton steps of shareWithBodies at most
   /// sum over i of f(i), in fixed chunks (the same bits on any number of threads).
   template <class F>
   static double chunkedSum(std::size_t n, F&& f);
@@ -293,8 +299,9 @@ class DivergenceFreeSolver {
   std::vector<Vec6> impulse_;             ///< (bodies) the step's push so far (N s, N m s)
   std::vector<Vec6> divergence_impulse_;  ///< (bodies) the divergence solve's part of it
   std::vector<Vec6> seen_;                ///< (bodies) velocity change seen (m/s, rad/s)
-  std::vector<Mat6> response_;            ///< (bodies) (I + M^-1 S)^-1 M^-1
-  std::vector<Vec6> answer_;              ///< (bodies) scratch
+  std::vector<Mat6> inverse_mass_;        ///< (bodies) M^-1
+  std::vector<Vec6> answer_, residual_;   ///< (bodies) shareWithBodies' d and push
+  std::vector<Mat6> stiffness_;           ///< (bodies) shareWithBodies' S of the free links
   std::vector<Vec3> body_force_, body_torque_;
 };
 
