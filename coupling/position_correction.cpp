@@ -75,10 +75,12 @@ bool escape(const Boundaries& boundaries, const BodyPlacement& at, Vec3& x) {
       const Vec3 y = x + (ring * step) * u;
       const Boundaries::Clearance there = boundaries.clearance(y, at);
       if (there.walls < static_limit) continue;
-      // A point as deep in a wall as the particle (beside a box resting on the floor, the
-      // particle pressed into the floor under it) is a way out once lifted out of it.
+      // A point in a static wall (not beyond static_limit) and in nothing deeper (beside a
+      // box resting on the floor, the particle pressed into the floor under it) is a way
+      // out once lifted out of the wall. Not a point inside a body: lifted, the particles
+      // inside a body moved onto them would all land on its nearest face.
       Vec3 lifted = y;
-      const bool lifts = there.all <= now && there.all > depth_limit &&
+      const bool lifts = there.all < rf / 16.0 && there.all >= there.walls &&
                          projectOut(boundaries, at, lifted, 0.5 * rf, 3);
       const double c = lifts ? boundaries.clearance(lifted, at).all : there.all;
       if (c <= now) continue;
