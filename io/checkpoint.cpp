@@ -192,23 +192,21 @@ SimulationState readCheckpoint(const std::string& path, CheckpointInfo* info) {
     s.neighbor_reference_id =
         r.readDataset<std::uint32_t>(group, "neighbor_reference_id", H5T_NATIVE_UINT32, 1);
   }
-  const std::vector<double> w = r.readDataset<double>(group, "wrenches", H5T_NATIVE_DOUBLE, 6);
-  s.wrenches.resize(w.size() / 6);
-  for (std::size_t b = 0; b < s.wrenches.size(); ++b) {
-    s.wrenches[b].force = Vec3(w[6 * b], w[6 * b + 1], w[6 * b + 2]);
-    s.wrenches[b].torque = Vec3(w[6 * b + 3], w[6 * b + 4], w[6 * b + 5]);
-  }
+  // Bodies x 6 doubles (force, torque) as wrenches.
+  auto wrenches = [&](const char* name) {
+    const std::vector<double> w = r.readDataset<double>(group, name, H5T_NATIVE_DOUBLE, 6);
+    std::vector<Wrench> out(w.size() / 6);
+    for (std::size_t b = 0; b < out.size(); ++b) {
+      out[b].force = Vec3(w[6 * b], w[6 * b + 1], w[6 * b + 2]);
+      out[b].torque = Vec3(w[6 * b + 3], w[6 * b + 4], w[6 * b + 5]);
+    }
+    return out;
+  };
+  s.wrenches = wrenches("wrenches");
   // Written since the divergence-free solver sees the bodies' answer to its pressure;
   // without it the resumed run starts that view afresh.
-  if (H5Lexists(group, "solver_forces", H5P_DEFAULT) > 0) {
-    const std::vector<double> sf =
-        r.readDataset<double>(group, "solver_forces", H5T_NATIVE_DOUBLE, 6);
-    s.solver_forces.resize(sf.size() / 6);
-    for (std::size_t b = 0; b < s.solver_forces.size(); ++b) {
-      s.solver_forces[b].force = Vec3(sf[6 * b], sf[6 * b + 1], sf[6 * b + 2]);
-      s.solver_forces[b].torque = Vec3(sf[6 * b + 3], sf[6 * b + 4], sf[6 * b + 5]);
-    }
-  }
+  if (H5Lexists(group, "solver_forces", H5P_DEFAULT) > 0)
+    s.solver_forces = wrenches("solver_forces");
   s.rigid = r.readDataset<double>(group, "rigid", H5T_NATIVE_DOUBLE, 1);
   return s;
 }

@@ -623,19 +623,21 @@ void DivergenceFreeSolver::shareWithBodies(double mass) {
   const std::size_t nb = answer_.size(), nl = links.size();
   for (Vec6& d : answer_)
     d.setZero();
+  // sum J_a . d_b over the links [l, e) of l's particle (consecutive); sets e.
+  auto change = [&](std::size_t l, std::size_t& e) {
+    double sum = 0.0;
+    for (e = l; e < nl && links[e].particle == links[l].particle; ++e)
+      sum += Eigen::Map<const Vec6>(links[e].flux).dot(answer_[links[e].body]);
+    return sum;
+  };
   for (int step = 0; step < kShareSteps; ++step) {
     for (std::size_t k = 0; k < nb; ++k) {
       residual_[k].setZero();
       stiffness_[k].setZero();
     }
-    for (std::size_t l = 0; l < nl;) {
-      // The links of one particle (consecutive).
+    for (std::size_t l = 0, e = 0; l < nl; l = e) {
       const std::uint32_t a = links[l].particle;
-      std::size_t e = l;
-      double change = 0.0;
-      for (; e < nl && links[e].particle == a; ++e)
-        change += Eigen::Map<const Vec6>(links[e].flux).dot(answer_[links[e].body]);
-      const double free_ds = ds_[a] - factor_[a] * change;
+      const double free_ds = ds_[a] - factor_[a] * change(l, e);
       const bool held = free_ds < -s_[a];
       const double share = held ? -s_[a] : free_ds;
       for (std::size_t t = l; t < e; ++t) {
@@ -643,7 +645,6 @@ void DivergenceFreeSolver::shareWithBodies(double mass) {
         residual_[links[t].body] += (2.0 * mass * share) * j;
         if (!held) stiffness_[links[t].body] += (2.0 * mass * factor_[a]) * (j * j.transpose());
       }
-      l = e;
     }
     double worst = 0.0;
     for (std::size_t k = 0; k < nb; ++k) {
@@ -656,14 +657,9 @@ void DivergenceFreeSolver::shareWithBodies(double mass) {
     }
     if (worst < 1e-6) break;
   }
-  for (std::size_t l = 0; l < nl; ++l) {
+  for (std::size_t l = 0, e = 0; l < nl; l = e) {
     const std::uint32_t a = links[l].particle;
-    double change = 0.0;
-    std::size_t e = l;
-    for (; e < nl && links[e].particle == a; ++e)
-      change += Eigen::Map<const Vec6>(links[e].flux).dot(answer_[links[e].body]);
-    ds_[a] = std::max(ds_[a] - factor_[a] * change, -s_[a]);
-    l = e - 1;
+    ds_[a] = std::max(ds_[a] - factor_[a] * change(l, e), -s_[a]);
   }
 }
 
