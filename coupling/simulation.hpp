@@ -106,7 +106,11 @@ class HealthError : public std::runtime_error {
 struct FluidSnapshot {
   std::vector<std::uint32_t> id;
   std::vector<Vec3> position, velocity;
-  std::vector<double> density, pressure;
+  std::vector<double> density;
+  /// Pa. With the divergence-free solver its running mean over the last steps
+  /// (FluidState::pressure_mean, DivergenceFreeSolver::kPressureMeanTime), not one step's
+  /// solve: that one comes in kicks around it.
+  std::vector<double> pressure;
 };
 
 /// Body state at the current time.

@@ -7,7 +7,9 @@
 //                           connectivity of the XDMF's one Polyvertex cell of particles
 //   /frames/000000, ...     one group per output frame, attribute time (s), datasets
 //                             position (N x 3, m), velocity (N x 3, m/s),
-//                             density (N, kg/m^3), pressure (N, Pa),
+//                             density (N, kg/m^3), pressure (N, Pa; with the
+//                             divergence-free solver its running mean over ~20 ms,
+//                             FluidSnapshot::pressure),
 //                             id (N, uint32: permanent particle number, ascending),
 //                           and bodies/<name> (V x 3, float, m): each moving body's mesh
 //                             vertices in the world at the frame's time

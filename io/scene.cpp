@@ -309,8 +309,8 @@ void readSolver(const ObjectReader& fluid, SimulationSettings& sim) {
   if (!dfsph) return;
   if (sim.solver != FluidSolver::Dfsph)
     dfsph->where().fail("is only used with \"solver\": \"dfsph\" (solver is \"" + solver + "\")");
-  dfsph->allowOnly(
-      {"max_density_error", "max_divergence_error", "max_iterations", "max_divergence_iterations"});
+  dfsph->allowOnly({"max_density_error", "max_divergence_error", "max_iterations",
+                    "max_divergence_iterations", "gradient_correction"});
   DfsphParams& d = sim.dfsph;
   const DfsphParams defaults = kDefaults.dfsph;
   d.max_density_error =
@@ -322,6 +322,9 @@ void readSolver(const ObjectReader& fluid, SimulationSettings& sim) {
   d.max_divergence_iterations =
       wholeNumber(*dfsph, "max_divergence_iterations", defaults.max_divergence_iterations,
                   Range{0.0, 1e6, false, false});
+  d.correct_gradient =
+      dfsph->choice("gradient_correction", defaults.correct_gradient ? "bulk" : "none",
+                    {"bulk", "none"}) == "bulk";
 }
 
 void readFluid(const ObjectReader& fluid, SimulationSettings& sim) {

@@ -6,6 +6,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 
@@ -93,7 +94,42 @@ inline Vec3 rowOffsets(const std::uint32_t* index, const float* gx, const float*
   return Vec3(ox.total(), oy.total(), oz.total());
 }
 
+/// sum_b g_ab (x) (x_b - x_a) of particle a's row (xx, yy, zz, xy, xz, yz; the padding adds
+/// zeros) into m, in four partial sums of Q (Quad2, Lanes4: the same bits).
+template <class Q>
+inline void rowMoments(const std::uint32_t* index, const float* gx, const float* gy,
+                       const float* gz, std::uint32_t k, std::uint32_t e, const Vec3* x,
+                       std::size_t a, double* m) {
+  Q xx = Q::all(0.0), yy = xx, zz = xx, xy = xx, xz = xx, yz = xx;
+  const Q xa = Q::all(x[a].x()), ya = Q::all(x[a].y()), za = Q::all(x[a].z());
+  for (std::uint32_t t = k; t < e; t += 4) {
+    const Q u = Q::loadFloats(gx + t), v = Q::loadFloats(gy + t), w = Q::loadFloats(gz + t);
+    const std::uint32_t* j = index + t;
+    const double* p[4] = {x[j[0]].data(), x[j[1]].data(), x[j[2]].data(), x[j[3]].data()};
+    Q xb, yb, zb;
+    Q::gather3(p, xb, yb, zb);
+    const Q dx = xb - xa, dy = yb - ya, dz = zb - za;
+    xx = xx + u * dx;
+    yy = yy + v * dy;
+    zz = zz + w * dz;
+    xy = xy + u * dy;
+    xz = xz + u * dz;
+    yz = yz + v * dz;
+  }
+  m[0] = xx.total();
+  m[1] = yy.total();
+  m[2] = zz.total();
+  m[3] = xy.total();
+  m[4] = xz.total();
+  m[5] = yz.total();
+}
+
 #if defined(WAKE_HAS_LANES4)
+WAKE_TARGET_AVX void rowMoments4(const std::uint32_t* index, const float* gx, const float* gy,
+                                 const float* gz, std::uint32_t k, std::uint32_t e, const Vec3* x,
+                                 std::size_t a, double* m) {
+  rowMoments<Lanes4>(index, gx, gy, gz, k, e, x, a, m);
+}
 WAKE_TARGET_AVX void rowGradients4(const Vec3& xa, const Vec3* x, const std::uint32_t* nb,
                                    std::uint32_t count, const CubicSplineKernel& kernel,
                                    double mass, double* g, double* d, double* w) {
@@ -216,6 +252,46 @@ void DivergenceFreeSolver::buildLists(const PairLists& pairs, std::size_t r, con
   }
 }
 
+void DivergenceFreeSolver::findCorrection(double rest_density) {
+  correction_.setIdentity();
+  bulk_ = 0;
+  const std::size_t n = moment_.size() / 6;
+  if (!params_.correct_gradient || n == 0) return;
+  // The mean of M over the bulk, in fixed chunks (the same bits on any number of threads).
+  constexpr std::size_t kChunk = 4096;
+  const std::int64_t chunks = static_cast<std::int64_t>((n + kChunk - 1) / kChunk);
+  std::vector<std::array<double, 7>> part(static_cast<std::size_t>(chunks));
+  const double scale = 1.0 / rest_density;
+#pragma omp parallel for schedule(static)
+  for (std::int64_t c = 0; c < chunks; ++c) {
+    std::array<double, 7> sum{};
+    const std::size_t end = std::min(n, (c + 1) * kChunk);
+    for (std::size_t i = c * kChunk; i < end; ++i) {
+      double m[6];
+      for (int k = 0; k < 6; ++k)
+        m[k] = scale * moment_[6 * i + k];
+      bool bulk = true;
+      for (int k = 0; k < 3; ++k)
+        bulk = bulk && std::abs(m[k] - 1.0) <= 0.1 && std::abs(m[3 + k]) <= 0.05;
+      if (!bulk) continue;
+      for (int k = 0; k < 6; ++k)
+        sum[k] += m[k];
+      sum[6] += 1.0;
+    }
+    part[static_cast<std::size_t>(c)] = sum;
+  }
+  std::array<double, 7> total{};
+  for (const std::array<double, 7>& p : part)
+    for (int k = 0; k < 7; ++k)
+      total[k] += p[k];
+  if (!(total[6] > 0.0)) return;
+  bulk_ = static_cast<std::size_t>(total[6]);
+  const double inv = 1.0 / total[6];
+  Eigen::Matrix3d mean;
+  mean << total[0], total[3], total[4], total[3], total[1], total[5], total[4], total[5], total[2];
+  correction_ = (inv * mean).inverse();
+}
+
 template <class F>
 double DivergenceFreeSolver::chunkedSum(std::size_t n, F&& f) {
   constexpr std::size_t kChunk = 4096;
@@ -311,6 +387,25 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
   enough_neighbors_ =
       static_cast<std::uint32_t>(std::ceil(0.75 * latticeNeighbors(fluid.params())));
   largest_gradient_ = largestGradient(kernel, fluid.particleMass());
+  moment_.resize(6 * n);
+  if (params_.correct_gradient) {
+    // Each particle's second moment: one pass over the lists (a gather of the neighbours'
+    // positions, as the offsets near walls).
+    auto moments = rowMoments<Quad2>;
+#if defined(WAKE_HAS_LANES4)
+    if (fluid.wideLanes()) moments = rowMoments4;
+#endif
+    const Vec3* x = st.position.data();
+    forEachRange(pairs, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
+      const Lists& L = lists_[r];
+      for (std::int64_t i = i0; i < i1; ++i) {
+        const std::size_t q = static_cast<std::size_t>(i - i0);
+        moments(L.index.data(), L.gx.data(), L.gy.data(), L.gz.data(), L.offset[q], L.offset[q + 1],
+                x, static_cast<std::size_t>(i), moment_.data() + 6 * i);
+      }
+    });
+  }
+  findCorrection(fluid.params().rest_density);
   wall_impulse_.assign(n, 0.0);  // a new step
   bodies_ready_ = false;
   lift_.assign(n, 0.0);
@@ -386,6 +481,7 @@ struct ImpulseTargets {
   /// (n) The least weight the mean around a is taken over (near walls): a particle with
   /// less fluid around it makes up the rest with its own increment.
   const double* weight_floor;
+  Eigen::Matrix3d correction;  ///< C (DivergenceFreeSolver::gradientCorrection)
 };
 
 /// The velocity change of the particles [i0, i1) for the increments ds, applied as each
@@ -419,7 +515,8 @@ inline void impulseRange(std::int64_t i0, std::int64_t i1, const RowView& L, con
         sz = sz + s * Q::loadFloats(L.gz + t);
       }
     }
-    Vec3 change = -ds[i] * grad_sum[i] - Vec3(sx.total(), sy.total(), sz.total());
+    const Vec3 pairs = ds[i] * grad_sum[i] + Vec3(sx.total(), sy.total(), sz.total());
+    Vec3 change = -(to.correction * pairs);
     if (near[i]) {
       // s_a + s^w_a: a's own and the mean of the fluid's around it, over at least
       // weight_floor (see DivergenceFreeSolver::computeFactors).
@@ -532,10 +629,10 @@ void DivergenceFreeSolver::applyImpulse(Fluid& fluid) {
 #if defined(WAKE_HAS_LANES4)
   if (fluid.wideLanes()) range = impulseRange4;
 #endif
-  const ImpulseTargets to{st.velocity.data(),  velocity_f_.data(),
-                          s_.data(),           wall_impulse_.data(),
-                          weight_.data(),      boundary_ ? boundary_->gradient.data() : nullptr,
-                          weight_floor_.data()};
+  const ImpulseTargets to{
+      st.velocity.data(),   velocity_f_.data(), s_.data(),
+      wall_impulse_.data(), weight_.data(),     boundary_ ? boundary_->gradient.data() : nullptr,
+      weight_floor_.data(), correction_};
   forEachRow(fluid.neighbors(), [&](std::int64_t i0, std::int64_t i1, const RowView& L) {
     range(i0, i1, L, ds_.data(), grad_sum_.data(), near_wall_.data(), to);
   });

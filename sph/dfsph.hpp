@@ -77,6 +77,23 @@
 // step (unstable beyond mu = 2); seen within the solve against the last step's push it
 // decays by sqrt(mu / (1 + mu)) a step at any mu.
 //
+// The fluid pairs' impulse goes through a correction of SPH's gradient (DfsphParams::
+// correct_gradient): -(s_a + s_b) C g_ab, C = M^-1 with M the mean over the bulk of each
+// particle's second moment M_a = sum_b V_b x_ba (x) grad_a W_ab (V_b = m / rho0; the
+// integral's is I). The pressure that holds a column at rest is the one whose SPH gradient
+// carries its weight, so it is off by as much as M is from I on the arrangement the
+// particles settle in: 1.020 on the cubic lattice, 0.988 (vertical) in a column settled at
+// r = 4 or 5 mm, 1.008 at 5.5 mm; the column's pressure was +1.2 / +1.5 / +1.3 / -1.9 /
+// +1.9 % of the weight above at r = 4 / 4.5 / 5 / 5.5 / 6 mm, and with C -0.4 / +0.7 /
+// -0.7 / +0.5 / +0.6 % (the test's frames: tests/physics). One matrix for the fluid: the
+// pair sums stay antisymmetric (C sum_ab = 0: no momentum made), it costs a 3 x 3 product
+// per particle and impulse, and a pass over the lists for the moments. A correction per
+// particle (Bonet & Lok's L_a, with L_ab = (L_a + L_b) / 2 to keep momentum) also corrects
+// where the arrangement varies, but needs L_b per pair in every impulse (or a second set
+// of stored gradients) and a fallback where the support is cut (free surfaces, walls).
+// The walls' and bodies' terms keep the plain gradient (their samples' volumes are
+// calibrated on the density, not on M).
+//
 // prepareLists() stores each particle's whole neighbour list with its pairs' g_ab (floats;
 // a pair is computed once and stored in both lists), summing the fluid's densities in the
 // same pass and keeping each pair's W'(r) / r for the viscous forces, so that the
@@ -110,6 +127,11 @@ struct DfsphParams {
   double max_divergence_error = 1e-3;
   int max_iterations = 100;             ///< density solve, >= 2 (it runs at least 2)
   int max_divergence_iterations = 100;  ///< divergence solve, >= 0 (0: no divergence solve)
+  /// The fluid pairs' pressure impulse through the gradient correction C
+  /// (DivergenceFreeSolver::gradientCorrection): SPH's pressure gradient on the arrangement
+  /// the particles settle in is off by a few per cent (a column at rest: M_yy 0.988 at r = 4
+  /// and 5 mm, 1.008 at 5.5 mm), and so is the pressure that holds the fluid up.
+  bool correct_gradient = true;
 };
 
 /// Iterations and errors of one step's solves.
@@ -212,6 +234,15 @@ class DivergenceFreeSolver {
 
   const DfsphStats& stats() const { return stats_; }
 
+  /// The step's correction C of the fluid's pressure gradient (prepare(); the identity
+  /// before, or with DfsphParams::correct_gradient off): the inverse of the mean second
+  /// moment M = sum_b V_b x_ba (x) grad_a W_ab (V_b = m / rho0) over the particles whose
+  /// own M is within 0.1 of the identity on the diagonal and 0.05 off it (the bulk: a full
+  /// support of fluid). The fluid pairs' pressure impulse is -(s_a + s_b) C g_ab.
+  const Eigen::Matrix3d& gradientCorrection() const { return correction_; }
+  /// How many particles the step's C was averaged over (0: C is the identity).
+  std::size_t bulkParticles() const { return bulk_; }
+
   /// W'(r) / r of each pair of the fluid's pair lists as the last lists were built (for
   /// Fluid::computeAccelerations in the same step: the viscous forces without a square root
   /// and kernel per pair).
@@ -236,6 +267,8 @@ class DivergenceFreeSolver {
                   const CubicSplineKernel& kernel, double mass, bool wide, double* density);
   /// Every range's lists, and the density where not null.
   void buildAllLists(const Fluid& fluid, double* density);
+  /// correction_ and bulk_ from moment_ (the step's lists).
+  void findCorrection(double rest_density);
   /// factor_, sparse_ and centre_ from the gradient sums of the step's first rates.
   void computeFactors();
   /// range(i0, i1, view) for every range of particles [i0, i1) and its lists, in parallel.
@@ -274,26 +307,31 @@ class DivergenceFreeSolver {
   std::size_t lists_particles_ = kNoLists;
   const SolverBoundary* boundary_ = nullptr;  ///< null: no boundary
   std::vector<double> factor_;                ///< (n) a_a (m^8 / kg^2)
-  std::vector<Vec3> grad_sum_;                ///< (n) sum_b g_ab (kg/m^4)
-  std::vector<std::uint8_t> sparse_;          ///< (n) too few neighbours for the divergence solve
-  std::vector<std::uint8_t> near_wall_;       ///< (n) G_a != 0: samples in a's support
-  std::vector<double> weight_;                ///< (n) sum_b w_ab = sum_b |g_ab|^2
-  std::vector<std::uint32_t> count_;          ///< (n) fluid neighbours
-  std::vector<Vec3> offset_;                  ///< (n) sum_b w_ab (x_b - x_a) (near walls)
-  std::vector<Vec3> centre_;                  ///< (n) c_a (m, with a boundary)
-  bool factors_ready_ = false;                ///< the step's first rates found the factors
-  double factor_floor_ = 0.0;                 ///< a_a's denominator below this: no pressure
-  std::uint32_t enough_neighbors_ = 0;        ///< fewer (fluid and walls): sparse_
-  std::vector<double> weight_floor_;          ///< (n) the least weight of s^w_a's mean
-  double largest_gradient_ = 0.0;             ///< max |g_ab| (kg/m^4)
-  std::vector<double> rate_;                  ///< (n) D_a
-  std::vector<float> velocity_f_;             ///< (4 n) the velocities as floats
-  bool floats_fresh_ = false;                 ///< velocity_f_ is of the velocities as they are
-  bool rates_fresh_ = false;                  ///< rate_ is of the velocities as they are
-  std::vector<double> s_;                     ///< (n) this solve's s so far
-  std::vector<double> ds_;                    ///< (n) this iteration's increment of s
-  std::vector<double> wall_impulse_;          ///< (n) sum of s_a + s^w_a over the step's solves
-  std::vector<double> lift_;                  ///< (n) l_a of the density solve
+  /// (6 n) sum_b g_ab (x) (x_b - x_a) of each particle (xx, yy, zz, xy, xz, yz; kg/m^3):
+  /// rho0 times its fluid's second moment M_a (with correct_gradient).
+  std::vector<double> moment_;
+  Eigen::Matrix3d correction_ = Eigen::Matrix3d::Identity();  ///< C, see gradientCorrection
+  std::size_t bulk_ = 0;                                      ///< see bulkParticles
+  std::vector<Vec3> grad_sum_;                                ///< (n) sum_b g_ab (kg/m^4)
+  std::vector<std::uint8_t> sparse_;     ///< (n) too few neighbours for the divergence solve
+  std::vector<std::uint8_t> near_wall_;  ///< (n) G_a != 0: samples in a's support
+  std::vector<double> weight_;           ///< (n) sum_b w_ab = sum_b |g_ab|^2
+  std::vector<std::uint32_t> count_;     ///< (n) fluid neighbours
+  std::vector<Vec3> offset_;             ///< (n) sum_b w_ab (x_b - x_a) (near walls)
+  std::vector<Vec3> centre_;             ///< (n) c_a (m, with a boundary)
+  bool factors_ready_ = false;           ///< the step's first rates found the factors
+  double factor_floor_ = 0.0;            ///< a_a's denominator below this: no pressure
+  std::uint32_t enough_neighbors_ = 0;   ///< fewer (fluid and walls): sparse_
+  std::vector<double> weight_floor_;     ///< (n) the least weight of s^w_a's mean
+  double largest_gradient_ = 0.0;        ///< max |g_ab| (kg/m^4)
+  std::vector<double> rate_;             ///< (n) D_a
+  std::vector<float> velocity_f_;        ///< (4 n) the velocities as floats
+  bool floats_fresh_ = false;            ///< velocity_f_ is of the velocities as they are
+  bool rates_fresh_ = false;             ///< rate_ is of the velocities as they are
+  std::vector<double> s_;                ///< (n) this solve's s so far
+  std::vector<double> ds_;               ///< (n) this iteration's increment of s
+  std::vector<double> wall_impulse_;     ///< (n) sum of s_a + s^w_a over the step's solves
+  std::vector<double> lift_;             ///< (n) l_a of the density solve
   // The bodies the density solve moves (SolverBoundary::links, bodies).
   bool bodies_ready_ = false;             ///< prepareBodies ran for this step
   std::vector<Vec6> impulse_;             ///< (bodies) the step's push so far (N s, N m s)

@@ -58,7 +58,13 @@ TEST(SceneLoader, DivergenceFreeSolverAndItsSettings) {
   EXPECT_EQ(s.sim.dfsph.max_divergence_iterations, 0);  // no divergence solve
   EXPECT_EQ(s.sim.dfsph.max_divergence_error, d.max_divergence_error);
   EXPECT_EQ(s.sim.dfsph.max_iterations, d.max_iterations);
+  EXPECT_TRUE(s.sim.dfsph.correct_gradient);  // "bulk", the default
   EXPECT_EQ(s.sim.cfl, 0.6);
+  const SceneFile off = parseScene(R"({"time": {"end": 1},
+      "fluid": {"particle_radius": 0.01, "solver": "dfsph", "dfsph": {"gradient_correction": "none"},
+                "blocks": [{"min": [0, 0, 0], "max": [1, 1, 1]}]}})",
+                                   "plain.json");
+  EXPECT_FALSE(off.sim.dfsph.correct_gradient);
 }
 
 TEST(SceneLoader, SmallDambreak) {
@@ -432,6 +438,12 @@ const BadCase kBadCases[] = {
        s["fluid"]["dfsph"] = {{"max_density_error", 0.5}};
      },
      "fluid.dfsph.max_density_error: ", "in (0, 0.1]"},
+    {"dfsph unknown gradient correction",
+     [](json& s) {
+       s["fluid"]["solver"] = "dfsph";
+       s["fluid"]["dfsph"] = {{"gradient_correction", "local"}};
+     },
+     "fluid.dfsph.gradient_correction: ", "unknown value \"local\""},
     {"dfsph iterations not whole",
      [](json& s) {
        s["fluid"]["solver"] = "dfsph";

@@ -190,3 +190,70 @@ TEST(Dfsph, SameBitsOnAnyNumberOfThreadsWithAndWithoutWideLanes) {
   }
   omp_set_num_threads(saved);
 }
+
+TEST(Dfsph, GradientCorrectionIsTheInverseOfTheBulksSecondMoment) {
+  // On the cubic lattice of the particles' spacing, with the support two spacings wide,
+  // sum_b V_b x_ba (x) grad_a W_ab is 1.0200 I (the sum, worked out by hand with the cubic
+  // spline, falls 2 % from the integral's I), so SPH's pressure gradient there is 2 % too
+  // steep and the fluid's pressure 2 % low. Every particle but the outer layer has its
+  // whole support (the lattice points two spacings away are where W' ends): 10^3 of 12^3.
+  Fluid fluid(solverFluid(), kSolverDomain);
+  const double s = fluid.params().spacing();
+  fillBlock(fluid, 12, s, 0.0, [](const Vec3&) { return Vec3::Zero(); });
+  fluid.updateNeighbors();
+  fluid.computeFluidDensity();
+  DivergenceFreeSolver solver{DfsphParams{}};
+  solver.prepare(fluid, kNoBoundary);
+  EXPECT_EQ(solver.bulkParticles(), 1000u);
+  const Eigen::Matrix3d expected = Eigen::Matrix3d::Identity() / 1.0200417;
+  EXPECT_LT((solver.gradientCorrection() - expected).cwiseAbs().maxCoeff(), 1e-5)
+      << solver.gradientCorrection();
+
+  // A block squeezed along y by 5 %: C is the inverse of the bulk's mean moment, summed
+  // here pair by pair (V_b = m / rho0) over the particles whose own moment is within 0.1
+  // of I on the diagonal and 0.05 off it.
+  Fluid squeezed(solverFluid(), kSolverDomain);
+  std::uint32_t id = 0;
+  for (int k = 0; k < 12; ++k)
+    for (int j = 0; j < 12; ++j)
+      for (int i = 0; i < 12; ++i)
+        squeezed.state().append(Vec3(s * i, 0.95 * s * j, s * k), Vec3::Zero(), id++, 0.0);
+  squeezed.updateNeighbors();
+  squeezed.computeFluidDensity();
+  solver.prepare(squeezed, kNoBoundary);
+  const CubicSplineKernel& kernel = squeezed.kernel();
+  const double volume = squeezed.particleMass() / squeezed.params().rest_density;
+  Eigen::Matrix3d mean = Eigen::Matrix3d::Zero();
+  std::size_t bulk = 0;
+  for (const Vec3& a : squeezed.state().position) {
+    Eigen::Matrix3d moment = Eigen::Matrix3d::Zero();
+    for (const Vec3& b : squeezed.state().position) {
+      const Vec3 d = a - b;
+      if (d.norm() < kernel.supportRadius())
+        moment -= volume * kernel.derivativeOverR(d.norm()) * d * d.transpose();
+    }
+    const Eigen::Matrix3d off = moment - Eigen::Matrix3d::Identity();
+    if (off.diagonal().cwiseAbs().maxCoeff() > 0.1 ||
+        std::max({std::abs(off(0, 1)), std::abs(off(0, 2)), std::abs(off(1, 2))}) > 0.05)
+      continue;
+    mean += moment;
+    ++bulk;
+  }
+  mean /= double(bulk);
+  const Eigen::Matrix3d& c = solver.gradientCorrection();
+  std::printf("[ dfsph ] lattice squeezed 5 %% along y: bulk %zu, M = diag(%.4f, %.4f, %.4f)\n",
+              bulk, mean(0, 0), mean(1, 1), mean(2, 2));
+  EXPECT_EQ(solver.bulkParticles(), bulk);
+  EXPECT_GT(bulk, 500u);
+  // (The solver sums its stored gradients, floats: 1e-8 apart.)
+  EXPECT_LT((c - mean.inverse()).cwiseAbs().maxCoeff(), 1e-6) << c;
+  EXPECT_GT(std::abs(mean(1, 1) - mean(0, 0)), 1e-4);  // anisotropic
+
+  // Off: the plain SPH gradient.
+  DfsphParams off;
+  off.correct_gradient = false;
+  DivergenceFreeSolver plain(off);
+  plain.prepare(fluid, kNoBoundary);
+  EXPECT_EQ(plain.bulkParticles(), 0u);
+  EXPECT_EQ(plain.gradientCorrection(), Eigen::Matrix3d::Identity());
+}
