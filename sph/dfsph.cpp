@@ -311,6 +311,17 @@ double DivergenceFreeSolver::chunkedSum(std::size_t n, F&& f) {
   return total;
 }
 
+template <class RowF>
+void DivergenceFreeSolver::forEachListRow(const PairLists& pairs, RowF&& row) const {
+  forEachRange(pairs, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
+    const Lists& L = lists_[r];
+    for (std::int64_t i = i0; i < i1; ++i) {
+      const std::size_t q = static_cast<std::size_t>(i - i0);
+      row(static_cast<std::size_t>(i), L, L.offset[q], L.offset[q + 1]);
+    }
+  });
+}
+
 void DivergenceFreeSolver::buildAllLists(const Fluid& fluid, double* density) {
   const FluidState& st = fluid.state();
   const PairLists& pairs = fluid.neighbors();
@@ -358,14 +369,9 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
     if (fluid.wideLanes()) offsets = rowOffsets4;
 #endif
     const Vec3* x = st.position.data();
-    forEachRange(pairs, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
-      const Lists& L = lists_[r];
-      for (std::int64_t i = i0; i < i1; ++i) {
-        if (!near_wall_[i]) continue;
-        const std::size_t q = static_cast<std::size_t>(i - i0);
-        offset_[i] = offsets(L.index.data(), L.gx.data(), L.gy.data(), L.gz.data(), L.offset[q],
-                             L.offset[q + 1], x, static_cast<std::size_t>(i));
-      }
+    forEachListRow(pairs, [&](std::size_t i, const Lists& L, std::uint32_t k, std::uint32_t e) {
+      if (near_wall_[i])
+        offset_[i] = offsets(L.index.data(), L.gx.data(), L.gy.data(), L.gz.data(), k, e, x, i);
     });
   }
   // The gradient sums and the factors come with the first pass over the lists (the step's
@@ -396,13 +402,9 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
     if (fluid.wideLanes()) moments = rowMoments4;
 #endif
     const Vec3* x = st.position.data();
-    forEachRange(pairs, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
-      const Lists& L = lists_[r];
-      for (std::int64_t i = i0; i < i1; ++i) {
-        const std::size_t q = static_cast<std::size_t>(i - i0);
-        moments(L.index.data(), L.gx.data(), L.gy.data(), L.gz.data(), L.offset[q], L.offset[q + 1],
-                x, static_cast<std::size_t>(i), moment_.data() + 6 * i);
-      }
+    forEachListRow(pairs, [&](std::size_t i, const Lists& L, std::uint32_t k, std::uint32_t e) {
+      moments(L.index.data(), L.gx.data(), L.gy.data(), L.gz.data(), k, e, x, i,
+              moment_.data() + 6 * i);
     });
   }
   findCorrection(fluid.params().rest_density);

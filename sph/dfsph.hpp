@@ -271,6 +271,10 @@ class DivergenceFreeSolver {
   void findCorrection(double rest_density);
   /// factor_, sparse_ and centre_ from the gradient sums of the step's first rates.
   void computeFactors();
+  /// row(i, lists, k, e) for every particle i, its row being [k, e) of its range's lists
+  /// (ranges in parallel).
+  template <class RowF>
+  void forEachListRow(const PairLists& pairs, RowF&& row) const;
   /// range(i0, i1, view) for every range of particles [i0, i1) and its lists, in parallel.
   template <class RangeF>
   void forEachRow(const PairLists& pairs, RangeF&& range);
