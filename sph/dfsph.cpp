@@ -395,16 +395,24 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
   largest_gradient_ = largestGradient(kernel, fluid.particleMass());
   moment_.resize(6 * n);
   if (params_.correct_gradient) {
-    // Each particle's second moment: one pass over the lists (a gather of the neighbours'
+    // The particles' second moments: a pass over their rows (a gather of the neighbours'
     // positions, as the offsets near walls).
     auto moments = rowMoments<Quad2>;
 #if defined(WAKE_HAS_LANES4)
     if (fluid.wideLanes()) moments = rowMoments4;
 #endif
+    // Of about kMomentSamples particles, chosen by their permanent number (the same ones on
+    // any number of threads and after a restart); the others' first entry 0: not bulk.
+    const std::uint32_t stride =
+        static_cast<std::uint32_t>(std::max<std::size_t>(1, n / kMomentSamples));
     const Vec3* x = st.position.data();
+    const std::uint32_t* id = st.id.data();
     forEachListRow(pairs, [&](std::size_t i, const Lists& L, std::uint32_t k, std::uint32_t e) {
-      moments(L.index.data(), L.gx.data(), L.gy.data(), L.gz.data(), k, e, x, i,
-              moment_.data() + 6 * i);
+      double* m = moment_.data() + 6 * i;
+      if (id[i] % stride != 0)
+        m[0] = 0.0;
+      else
+        moments(L.index.data(), L.gx.data(), L.gy.data(), L.gz.data(), k, e, x, i, m);
     });
   }
   findCorrection(fluid.params().rest_density);
@@ -495,6 +503,10 @@ struct ImpulseTargets {
 template <class Q>
 inline void impulseRange(std::int64_t i0, std::int64_t i1, const RowView& L, const double* ds,
                          const Vec3* grad_sum, const std::uint8_t* near, const ImpulseTargets& to) {
+  // C in locals: the rows' stores to the velocities may not be taken to leave it alone.
+  const double c[3][3] = {{to.correction(0, 0), to.correction(0, 1), to.correction(0, 2)},
+                          {to.correction(1, 0), to.correction(1, 1), to.correction(1, 2)},
+                          {to.correction(2, 0), to.correction(2, 1), to.correction(2, 2)}};
   for (std::int64_t i = i0; i < i1; ++i) {
     const std::size_t q = static_cast<std::size_t>(i - i0);
     Q sx = Q::all(0.0), sy = sx, sz = sx, sw = sx;
@@ -518,7 +530,9 @@ inline void impulseRange(std::int64_t i0, std::int64_t i1, const RowView& L, con
       }
     }
     const Vec3 pairs = ds[i] * grad_sum[i] + Vec3(sx.total(), sy.total(), sz.total());
-    Vec3 change = -(to.correction * pairs);
+    Vec3 change;
+    for (int r = 0; r < 3; ++r)
+      change[r] = -((c[r][0] * pairs[0] + c[r][1] * pairs[1]) + c[r][2] * pairs[2]);
     if (near[i]) {
       // s_a + s^w_a: a's own and the mean of the fluid's around it, over at least
       // weight_floor (see DivergenceFreeSolver::computeFactors).
@@ -597,13 +611,17 @@ void DivergenceFreeSolver::densityRates(const Fluid& fluid) {
 void DivergenceFreeSolver::computeFactors() {
   const std::int64_t n = static_cast<std::int64_t>(factor_.size());
   const SolverBoundary* b = boundary_;
+  const double mean_scale = correction_.trace() / 3.0;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
-    // s_a's own push: -s_a (sum_b g_ab + 3/2 G_a) (its own half of s^w_a); the change of
-    // D_a it makes: -s_a [(sum_b g_ab + G_a) . (sum_b g_ab + 3/2 G_a) + sum_b |g_ab|^2].
+    // s_a's own push: -s_a (C sum_b g_ab + 3/2 G_a) (its own half of s^w_a), and its
+    // neighbours' s_a C g_ab; the change of D_a it makes: -s_a [(sum_b g_ab + G_a) .
+    // (C sum_b g_ab + 3/2 G_a) + sum_b g_ab . C g_ab], the last taken as tr(C) / 3 times
+    // sum_b |g_ab|^2.
     const Vec3 wall = b ? b->gradient[i] : Vec3(Vec3::Zero());
     const Vec3 g = grad_sum_[i] + wall;
-    const double denominator = std::max(g.dot(g + 0.5 * wall), 0.0) + weight_[i];
+    const double denominator =
+        std::max(g.dot(correction_ * grad_sum_[i] + 1.5 * wall), 0.0) + mean_scale * weight_[i];
     // A particle with (almost) no neighbours has no pressure to find.
     factor_[i] = denominator > factor_floor_ ? 1.0 / denominator : 0.0;
     const std::uint32_t around = count_[i] + (b ? b->neighbors[i] : 0u);
