@@ -83,9 +83,11 @@
 // integral's is I). The pressure that holds a column at rest is the one whose SPH gradient
 // carries its weight, so it is off by as much as M is from I on the arrangement the
 // particles settle in: 1.020 on the cubic lattice, 0.988 (vertical) in a column settled at
-// r = 4 or 5 mm, 1.008 at 5.5 mm; the column's pressure was +1.2 / +1.5 / +1.3 / -1.9 /
-// +1.9 % of the weight above at r = 4 / 4.5 / 5 / 5.5 / 6 mm, and with C -0.4 / +0.7 /
-// -0.7 / +0.5 / +0.6 % (the test's frames: tests/physics). One matrix for the fluid: the
+// r = 4 or 5 mm, 1.008 at 5.5 mm; the column's pressure was +0.44..+0.91 / +1.31..+1.90 /
+// +0.05..+0.85 / -0.55..+0.15 / +1.20..+2.00 % of the weight above at r = 4 / 4.5 / 5 /
+// 5.5 / 6 mm, and with C -0.89..-0.22 / +0.00..+0.76 / -0.80..-0.17 / +0.09..+0.58 /
+// +0.32..+0.92 % (the frames' running mean, over the tank's section and 0.25 s:
+// tests/physics, Solvers.HydrostaticPressureIsTheWeightAbove...). One matrix for the fluid: the
 // pair sums stay antisymmetric (C sum_ab = 0: no momentum made), it costs a 3 x 3 product
 // per particle and impulse, and a pass over the lists for the moments. A correction per
 // particle (Bonet & Lok's L_a, with L_ab = (L_a + L_b) / 2 to keep momentum) also corrects
