@@ -6,9 +6,9 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <stdexcept>
+#include <type_traits>
 
 namespace wake {
 
@@ -252,63 +252,55 @@ void DivergenceFreeSolver::buildLists(const PairLists& pairs, std::size_t r, con
   }
 }
 
+template <class F>
+auto DivergenceFreeSolver::chunkedSum(std::size_t n, F&& f) {
+  using T = std::decay_t<decltype(f(std::size_t(0)))>;
+  T zero;
+  if constexpr (std::is_arithmetic_v<T>)
+    zero = T(0);
+  else
+    zero = T::Zero();
+  constexpr std::size_t kChunk = 4096;
+  const std::int64_t chunks = static_cast<std::int64_t>((n + kChunk - 1) / kChunk);
+  std::vector<T> part(static_cast<std::size_t>(chunks), zero);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t c = 0; c < chunks; ++c) {
+    T s = zero;
+    const std::size_t end = std::min(n, (c + 1) * kChunk);
+    for (std::size_t i = c * kChunk; i < end; ++i)
+      s += f(i);
+    part[c] = s;
+  }
+  T total = zero;
+  for (const T& s : part)
+    total += s;
+  return total;
+}
+
 void DivergenceFreeSolver::findCorrection(double rest_density) {
   correction_.setIdentity();
   bulk_ = 0;
   const std::size_t n = moment_.size() / 6;
   if (!params_.correct_gradient || n == 0) return;
-  // The mean of M over the bulk, in fixed chunks (the same bits on any number of threads).
-  constexpr std::size_t kChunk = 4096;
-  const std::int64_t chunks = static_cast<std::int64_t>((n + kChunk - 1) / kChunk);
-  std::vector<std::array<double, 7>> part(static_cast<std::size_t>(chunks));
+  // The sum of M over the bulk (entries 0-5) and its particles (6).
+  using Sum = Eigen::Matrix<double, 7, 1>;
   const double scale = 1.0 / rest_density;
-#pragma omp parallel for schedule(static)
-  for (std::int64_t c = 0; c < chunks; ++c) {
-    std::array<double, 7> sum{};
-    const std::size_t end = std::min(n, (c + 1) * kChunk);
-    for (std::size_t i = c * kChunk; i < end; ++i) {
-      double m[6];
-      for (int k = 0; k < 6; ++k)
-        m[k] = scale * moment_[6 * i + k];
-      bool bulk = true;
-      for (int k = 0; k < 3; ++k)
-        bulk = bulk && std::abs(m[k] - 1.0) <= 0.1 && std::abs(m[3 + k]) <= 0.05;
-      if (!bulk) continue;
-      for (int k = 0; k < 6; ++k)
-        sum[k] += m[k];
-      sum[6] += 1.0;
-    }
-    part[static_cast<std::size_t>(c)] = sum;
-  }
-  std::array<double, 7> total{};
-  for (const std::array<double, 7>& p : part)
-    for (int k = 0; k < 7; ++k)
-      total[k] += p[k];
+  const Sum total = chunkedSum(n, [&](std::size_t i) {
+    Sum m;
+    for (int k = 0; k < 6; ++k)
+      m[k] = scale * moment_[6 * i + k];
+    m[6] = 1.0;
+    bool bulk = true;
+    for (int k = 0; k < 3; ++k)
+      bulk = bulk && std::abs(m[k] - 1.0) <= 0.1 && std::abs(m[3 + k]) <= 0.05;
+    return bulk ? m : Sum(Sum::Zero());
+  });
   if (!(total[6] > 0.0)) return;
   bulk_ = static_cast<std::size_t>(total[6]);
   const double inv = 1.0 / total[6];
   Eigen::Matrix3d mean;
   mean << total[0], total[3], total[4], total[3], total[1], total[5], total[4], total[5], total[2];
   correction_ = (inv * mean).inverse();
-}
-
-template <class F>
-double DivergenceFreeSolver::chunkedSum(std::size_t n, F&& f) {
-  constexpr std::size_t kChunk = 4096;
-  const std::int64_t chunks = static_cast<std::int64_t>((n + kChunk - 1) / kChunk);
-  std::vector<double> part(static_cast<std::size_t>(chunks), 0.0);
-#pragma omp parallel for schedule(static)
-  for (std::int64_t c = 0; c < chunks; ++c) {
-    double s = 0.0;
-    const std::size_t end = std::min(n, (c + 1) * kChunk);
-    for (std::size_t i = c * kChunk; i < end; ++i)
-      s += f(i);
-    part[c] = s;
-  }
-  double total = 0.0;
-  for (double s : part)
-    total += s;
-  return total;
 }
 
 template <class RowF>

@@ -310,9 +310,10 @@ class DivergenceFreeSolver {
   /// The increments ds with each body's answer to them taken out (see above).
   void shareWithBodies(double mass);
   static constexpr int kShareSteps = 8;  ///< Newton steps of shareWithBodies at most
-  /// sum over i of f(i), in fixed chunks (the same bits on any number of threads).
+  /// sum over i of f(i) (a number or an Eigen vector), in fixed chunks (the same bits on any
+  /// number of threads).
   template <class F>
-  static double chunkedSum(std::size_t n, F&& f);
+  static auto chunkedSum(std::size_t n, F&& f);
 
   DfsphParams params_;
   DfsphStats stats_;
