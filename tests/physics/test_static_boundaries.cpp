@@ -55,6 +55,41 @@ std::string solverName(const ::testing::TestParamInfo<FluidSolver>& info) {
 INSTANTIATE_TEST_SUITE_P(, Solvers, ::testing::Values(FluidSolver::Wcsph, FluidSolver::Dfsph),
                          solverName);
 
+/// The pressure a frame gives (Simulation::snapshot) is the one that holds the fluid: the
+/// weakly compressible fluid's pressure of the step, the divergence-free solver's running
+/// mean (FluidState::pressure_mean; its pressure of one step comes in kicks), particle by
+/// particle in id order.
+TEST_P(Solvers, FramesPressureIsTheStepsOrTheSolversRunningMean) {
+  const double r = 0.005;
+  Simulation sim(withSolver(
+      tankScene(Vec3(0.1, 0.15, 0.1), {Vec3::Zero(), Vec3(0.1, 0.1, 0.1), Vec3::Zero()}, r)));
+  runWithoutPenetration(sim, 0.2);
+  FluidSnapshot frame;
+  sim.snapshot(frame);
+  const FluidState& st = sim.fluid().state();
+  ASSERT_EQ(frame.id.size(), st.size());
+  ASSERT_EQ(st.keepsPressureMean(), dfsph());
+  std::map<std::uint32_t, std::size_t> index_of;
+  for (std::size_t i = 0; i < st.size(); ++i)
+    index_of[st.id[i]] = i;
+  double differs = 0, mean = 0;
+  for (std::size_t k = 0; k < frame.id.size(); ++k) {
+    ASSERT_TRUE(k == 0 || frame.id[k] > frame.id[k - 1]);
+    const std::size_t i = index_of.at(frame.id[k]);
+    const double expected = dfsph() ? st.pressure_mean[i] : st.pressure[i];
+    ASSERT_EQ(frame.pressure[k], expected) << "id " << frame.id[k];
+    differs += std::abs(st.pressure[i] - expected);
+    mean += expected;
+  }
+  mean /= double(frame.id.size());
+  differs /= double(frame.id.size());
+  std::printf("[ frames ] %s: mean pressure %.1f Pa, mean |step's - frame's| %.1f Pa\n",
+              dfsph() ? "dfsph" : "wcsph", mean, differs);
+  EXPECT_GT(mean, 100.0);  // a column 10 cm deep: 490 Pa on average
+  // The solver's step pressure is not its mean: the frames would swing from step to step.
+  if (dfsph()) EXPECT_GT(differs, 0.05 * mean);
+}
+
 /// A column of water at rest in a tank of `width` x `width` (m) filled to `height` with
 /// particles of radius r: checks that it comes to rest and that the pressure a user reads in
 /// the frames (Simulation::snapshot) is the weight of the water above per unit area at every
