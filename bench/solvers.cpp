@@ -5,7 +5,8 @@
 // step, the divergence-free solver's iterations per step and ns per particle per iteration,
 // the density error (average over the steps of the average compression, the worst step's
 // average, the largest single density ratio) and whether any fluid entered a body; then
-// how many times less wall time the divergence-free solver needed.
+// how many times less wall time the divergence-free solver needed, and where each run's
+// time went (Simulation::timings: neighbours, density, forces with the solves, boundary).
 //
 //   wake_bench_solvers [--scene FILE] [--particles N] [--sim-time T] [--threads K]
 //                      [--dfsph-max-dt DT] [--dfsph-cfl L] [--dfsph-max-error E]
@@ -185,6 +186,15 @@ int main(int argc, char** argv) {
                 iterations, divergence, per_iteration, sim.averageDensityError(),
                 sim.maxStepDensityError(), sim.maxDensityRatio(), sim.maxPenetrating());
     (run.dfsph ? wall_dfsph : wall_wcsph) = wall;
+  }
+  // Where each run's time went (Simulation::timings: seconds over the run).
+  for (Run& run : runs) {
+    const StepTimings& t = run.world->coupled().simulation().timings();
+    std::printf(
+        "# %s s: neighbours %.2f, density %.2f, forces %.2f (solves %.2f), boundary %.2f "
+        "(control %.2f, correction %.2f), integration %.2f, rigid %.2f\n",
+        run.name.c_str(), t.neighbors, t.density, t.forces, t.solver, t.boundary, t.control,
+        t.correction, t.integration, t.rigid);
   }
   if (wall_wcsph > 0 && wall_dfsph > 0)
     std::printf("# dfsph needs %.2fx less wall time than wcsph for the same simulated time\n",

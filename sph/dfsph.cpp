@@ -539,8 +539,8 @@ inline void impulseRange(std::int64_t i0, std::int64_t i1, const RowView& L, con
     v += change;
     to.s[i] += ds[i];
     float* vf = to.velocity_f + 4 * i;
-    for (int c = 0; c < 3; ++c)
-      vf[c] = static_cast<float>(v[c]);
+    for (int axis = 0; axis < 3; ++axis)
+      vf[axis] = static_cast<float>(v[axis]);
   }
 }
 
@@ -833,9 +833,9 @@ int DivergenceFreeSolver::solveDensity(Fluid& fluid, const Vec3& gravity, double
   st.keepPressureMean();
   s_.assign(n, 0.0);
   ds_.resize(n);
-  // Warm start: half the last step's pressure (s = dt p / rho^2) where the fluid would be
-  // compressed at the step's end with the velocities of its start (the divergence solve's
-  // rates); the iterations only add pressure, so this is how it falls.
+  // Warm start: kWarmStart of the last step's pressure (s = dt p / rho^2) where the fluid
+  // would be compressed at the step's end with the velocities of its start (the divergence
+  // solve's rates); the iterations only add pressure, so this is how it falls.
   if (!rates_fresh_) densityRates(fluid);
   rates_fresh_ = false;
   const bool bodies = boundary_ && !boundary_->links.empty();
@@ -843,7 +843,8 @@ int DivergenceFreeSolver::solveDensity(Fluid& fluid, const Vec3& gravity, double
   const double any = chunkedSum(n, [&](std::size_t i) {
     const double rho = st.density[i];
     const bool compressed = rho + dt * rate_[i] > rho0;
-    ds_[i] = compressed && st.pressure[i] > 0.0 ? 0.5 * dt * st.pressure[i] / (rho * rho) : 0.0;
+    ds_[i] =
+        compressed && st.pressure[i] > 0.0 ? kWarmStart * dt * st.pressure[i] / (rho * rho) : 0.0;
     return ds_[i] > 0.0 ? 1.0 : 0.0;
   });
   if (any > 0.0) applyImpulse(fluid);

@@ -87,7 +87,9 @@ TEST_P(Solvers, FramesPressureIsTheStepsOrTheSolversRunningMean) {
               dfsph() ? "dfsph" : "wcsph", mean, differs);
   EXPECT_GT(mean, 100.0);  // a column 10 cm deep: 490 Pa on average
   // The solver's step pressure is not its mean: the frames would swing from step to step.
-  if (dfsph()) EXPECT_GT(differs, 0.05 * mean);
+  if (dfsph()) {
+    EXPECT_GT(differs, 0.05 * mean);
+  }
 }
 
 /// A column of water at rest in a tank of `width` x `width` (m) filled to `height` with
