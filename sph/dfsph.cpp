@@ -385,8 +385,8 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
   enough_neighbors_ =
       static_cast<std::uint32_t>(std::ceil(0.75 * latticeNeighbors(fluid.params())));
   largest_gradient_ = largestGradient(kernel, fluid.particleMass());
-  moment_.resize(6 * n);
   if (params_.correct_gradient) {
+    moment_.resize(6 * n);
     // The particles' second moments: a pass over their rows (a gather of the neighbours'
     // positions, as the offsets near walls).
     auto moments = rowMoments<Quad2>;

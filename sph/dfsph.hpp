@@ -23,7 +23,8 @@
 // weight alone, one fluid neighbour beside a wall fed its increment through a's walls back
 // into its own rate, and the solve diverged (DivergenceFreeSolver::computeFactors).
 // Its own s_a changes D_a by about -s_a / a_a, with the factor
-//   a_a = 1 / ((sum_b g_ab + G_a) . (sum_b g_ab + 3/2 G_a) + sum_b |g_ab|^2).
+//   a_a = 1 / ((sum_b g_ab + G_a) . (C sum_b g_ab + 3/2 G_a) + tr(C) / 3 sum_b |g_ab|^2)
+// (C the gradient correction below; I without it).
 // Each iteration raises s_a by what removes particle a's own compression (never lowers it:
 // no pull) and applies all of them at once. The density solve starts from 0.6 of the last
 // step's pressure where the fluid is compressed (warm start; SPlisHSPlasH takes half), so
@@ -249,8 +250,8 @@ class DivergenceFreeSolver {
   /// moment M = sum_b V_b x_ba (x) grad_a W_ab (V_b = m / rho0) over the particles whose
   /// own M is within 0.1 of the identity on the diagonal and 0.05 off it (the bulk: a full
   /// support of fluid; of a fluid of more than 2 kMomentSamples particles, those of a
-  /// fixed sample of about kMomentSamples). The fluid pairs' pressure impulse is -(s_a + s_b) C
-  /// g_ab.
+  /// fixed sample of about kMomentSamples). The fluid pairs' pressure impulse is
+  /// -(s_a + s_b) C g_ab.
   const Eigen::Matrix3d& gradientCorrection() const { return correction_; }
   /// How many particles the step's C was averaged over (0: C is the identity).
   std::size_t bulkParticles() const { return bulk_; }
@@ -333,7 +334,7 @@ class DivergenceFreeSolver {
   const SolverBoundary* boundary_ = nullptr;  ///< null: no boundary
   std::vector<double> factor_;                ///< (n) a_a (m^8 / kg^2)
   /// (6 n) sum_b g_ab (x) (x_b - x_a) of each particle (xx, yy, zz, xy, xz, yz; kg/m^3):
-  /// rho0 times its fluid's second moment M_a (with correct_gradient).
+  /// rho0 times its fluid's second moment M_a (empty without correct_gradient).
   std::vector<double> moment_;
   Eigen::Matrix3d correction_ = Eigen::Matrix3d::Identity();  ///< C, see gradientCorrection
   std::size_t bulk_ = 0;                                      ///< see bulkParticles
