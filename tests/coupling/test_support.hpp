@@ -8,8 +8,24 @@
 
 #include <algorithm>
 #include <memory>
+#include <string>
 
 namespace wake::test {
+
+/// A test that runs with each pressure model (SimulationSettings::solver): the weakly
+/// compressible fluid and the divergence-free solver. Instantiate with kSolvers and
+/// solverName: the tests are named .../wcsph and .../dfsph.
+class SolverTest : public ::testing::TestWithParam<FluidSolver> {
+ protected:
+  FluidSolver solver() const { return GetParam(); }
+  bool dfsph() const { return GetParam() == FluidSolver::Dfsph; }
+};
+
+inline const auto kSolvers = ::testing::Values(FluidSolver::Wcsph, FluidSolver::Dfsph);
+
+inline std::string solverName(const ::testing::TestParamInfo<FluidSolver>& info) {
+  return info.param == FluidSolver::Dfsph ? "dfsph" : "wcsph";
+}
 
 inline BodySettings staticBody(const std::string& name, std::shared_ptr<const Shape> shape,
                                double slip = 0.0, double restitution = 0.0,

@@ -2,6 +2,7 @@
 // (Archimedes), viscous drag, body-body contact under water. Every test also asserts that
 // no fluid centre ever entered a body's exact shape (max_penetrating == 0).
 #include "bullet_bridge/scene_world.hpp"
+#include "coupling/test_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -238,31 +239,36 @@ TEST(BuoyancyDfsph, DroppedLightBoxFloatsAtTheArchimedesDraftAtTwoThirdsTheSpaci
 /// own pressure, so the film's pressure is the box's weight, not a wall layer pressed
 /// flat, and it drains until the box's lowest point is one particle diameter (2 r) above
 /// the floor.
-void checkSinks(double ratio, CouplingMethod method, double slip) {
-  const Floating f = floatBox(ratio, method, 1.5, slip);
-  std::printf("[ sinking ] %s density ratio %.1f slip %.0f: lowest point %.4f m, speed %.4f m/s\n",
-              name(method), ratio, slip, f.lowest, f.speed);
+void checkSinks(FluidSolver solver, double ratio, CouplingMethod method, double slip) {
+  const Floating f = floatBox(ratio, method, 1.5, slip, false, solver);
+  std::printf(
+      "[ sinking ] %s%s density ratio %.1f slip %.0f: lowest point %.4f m, speed %.4f m/s\n",
+      solver == FluidSolver::Dfsph ? "dfsph " : "", name(method), ratio, slip, f.lowest, f.speed);
   EXPECT_LT(f.lowest, 1.02 * 2 * kRadius) << name(method) << " " << ratio;
   EXPECT_LT(f.speed, 0.01) << name(method) << " " << ratio;
   EXPECT_EQ(f.max_penetrating, 0u);
 }
 
-TEST(Sinking, DenseBoxSinksToTheFloorAndStays) {
-  checkSinks(2.0, CouplingMethod::Global, 0.0);  // no-slip walls and body
+class Sinking : public test::SolverTest {};
+INSTANTIATE_TEST_SUITE_P(, Sinking, test::kSolvers, test::solverName);
+
+TEST_P(Sinking, DenseBoxSinksToTheFloorAndStays) {
+  checkSinks(solver(), 2.0, CouplingMethod::Global, 0.0);  // no-slip walls and body
 }
 
-TEST(Sinking, DenserBoxSinksWithFreeSlip) {
+TEST_P(Sinking, DenserBoxSinksWithFreeSlip) {
   // Nothing holds the film but its pressure. Label "slow": not in CI.
-  checkSinks(3.0, CouplingMethod::Local, 1.0);
+  checkSinks(solver(), 3.0, CouplingMethod::Local, 1.0);
 }
 
 /// Depth (m) below the surface a sphere (r = 3 cm, 3000 kg/m^3) dropped from 1 cm above
 /// 25 cm of fluid has reached after 0.25 s.
-double sphereDepth(double viscosity) {
+double sphereDepth(FluidSolver solver, double viscosity) {
   const Vec3 size(0.16, 0.35, 0.16);
   const double depth = 0.25, radius = 0.03;
   SimulationSettings sim =
       fluidBox(Vec3(size.x(), depth, size.z()), CouplingMethod::Local, viscosity);
+  sim.solver = solver;
   BodySpec ball;
   ball.name = "ball";
   ball.kind = BodyKind::Dynamic;
@@ -281,15 +287,22 @@ double sphereDepth(double viscosity) {
   return depth - y;
 }
 
-TEST(Drag, SphereSinksDeeperInLessViscousFluid) {
-  const double thin = sphereDepth(0.1), thick = sphereDepth(3.0);
+class Drag : public test::SolverTest {};
+INSTANTIATE_TEST_SUITE_P(, Drag, test::kSolvers, test::solverName);
+
+TEST_P(Drag, SphereSinksDeeperInLessViscousFluid) {
+  const double thin = sphereDepth(solver(), 0.1), thick = sphereDepth(solver(), 3.0);
   EXPECT_GT(thin, thick + 0.005);
   EXPECT_GT(thin, 0.0);  // it did enter the fluid
 }
 
-TEST(BodyContact, BoxStaysStackedOnAHeavierBoxUnderWater) {
+class BodyContact : public test::SolverTest {};
+INSTANTIATE_TEST_SUITE_P(, BodyContact, test::kSolvers, test::solverName);
+
+TEST_P(BodyContact, BoxStaysStackedOnAHeavierBoxUnderWater) {
   const Vec3 size(0.24, 0.25, 0.16);
   SimulationSettings sim = fluidBox(Vec3(size.x(), 0.15, size.z()), CouplingMethod::Global);
+  sim.solver = solver();
   const Vec3 bottom_half(0.06, 0.03, 0.05), top_half(0.04, 0.02, 0.04);
   const Vec3 bottom_at(0.12, 0.03, 0.08), top_at(0.12, 0.08, 0.08);
   std::vector<BodySpec> bodies = {tank(size), box("bottom", bottom_half, 3000, bottom_at),
@@ -324,12 +337,13 @@ TEST(BodyContact, BoxStaysStackedOnAHeavierBoxUnderWater) {
   EXPECT_EQ(world.simulation().maxPenetrating(), 0u);
 }
 
-TEST(BodyContact, KinematicPlatePressesABoxOnTheFloorAndTheFluidBetweenGoesSideways) {
+TEST_P(BodyContact, KinematicPlatePressesABoxOnTheFloorAndTheFluidBetweenGoesSideways) {
   // A dense box rests on the floor under 6 cm of water; a kinematic plate comes down on
   // it at 0.1 m/s and presses it into the floor. The fluid between the plate and the box
   // is squeezed out sideways: none is left between them, none enters either, none leaves.
   const Vec3 size(0.20, 0.20, 0.12);
   SimulationSettings sim = fluidBox(Vec3(size.x(), 0.10, size.z()), CouplingMethod::Local);
+  sim.solver = solver();
   const Vec3 half(0.04, 0.02, 0.035), plate_half(0.05, 0.01, 0.045);
   BodySpec plate = box("plate", plate_half, 1000, Vec3(0.10, 2 * half.y() + 0.02 + 0.01, 0.06));
   plate.kind = BodyKind::Kinematic;

@@ -35,25 +35,28 @@ Vec3 meanVelocity(const FluidState& st) {
   return c / double(st.size());
 }
 
+}  // namespace
+
 /// The tests below run with each pressure model: the weakly compressible fluid and the
 /// divergence-free solver.
-class Solvers : public ::testing::TestWithParam<FluidSolver> {
+class Solvers : public test::SolverTest {
  protected:
   SimulationSettings withSolver(SimulationSettings s) const {
     s.solver = GetParam();
     return s;
   }
-  bool dfsph() const { return GetParam() == FluidSolver::Dfsph; }
 };
 
-std::string solverName(const ::testing::TestParamInfo<FluidSolver>& info) {
-  return info.param == FluidSolver::Dfsph ? "dfsph" : "wcsph";
-}
+class Hydrostatic : public test::SolverTest {};
+class Precision : public test::SolverTest {};
+class Slip : public test::SolverTest {};
+class Restitution : public test::SolverTest {};
 
-}  // namespace
-
-INSTANTIATE_TEST_SUITE_P(, Solvers, ::testing::Values(FluidSolver::Wcsph, FluidSolver::Dfsph),
-                         solverName);
+INSTANTIATE_TEST_SUITE_P(, Solvers, test::kSolvers, test::solverName);
+INSTANTIATE_TEST_SUITE_P(, Hydrostatic, test::kSolvers, test::solverName);
+INSTANTIATE_TEST_SUITE_P(, Precision, test::kSolvers, test::solverName);
+INSTANTIATE_TEST_SUITE_P(, Slip, test::kSolvers, test::solverName);
+INSTANTIATE_TEST_SUITE_P(, Restitution, test::kSolvers, test::solverName);
 
 /// The pressure a frame gives (Simulation::snapshot) is the one that holds the fluid: the
 /// weakly compressible fluid's pressure of the step, the divergence-free solver's running
@@ -200,7 +203,7 @@ TEST(HydrostaticDfsph, PressureIsTheWeightAboveAtOtherSpacings) {
   checkHydrostaticColumn(FluidSolver::Dfsph, 0.0055, 0.08, 0.25, 0.02);
 }
 
-TEST(Hydrostatic, StillWaterInATankThatDoesNotFitTheLatticeStaysCalm) {
+TEST_P(Hydrostatic, StillWaterInATankThatDoesNotFitTheLatticeStaysCalm) {
   // 7 cm of water at rest in a 0.108 x 0.109 m tank, r = 4 mm: the lattice leaves a gap
   // of about one spacing at two walls, which the water slowly fills. Nothing else moves:
   // the tank's edges and corners push the water there with the fluid's own pressure (an
@@ -209,6 +212,7 @@ TEST(Hydrostatic, StillWaterInATankThatDoesNotFitTheLatticeStaysCalm) {
   const double r = 0.004;
   SimulationSettings s =
       tankScene(Vec3(0.108, 0.3, 0.109), {Vec3::Zero(), Vec3(0.108, 0.07, 0.109), Vec3::Zero()}, r);
+  s.solver = solver();
   Simulation sim(s);
   double fastest = 0.0;
   for (double t = 0.002; t < 0.02 + 1e-9; t += 0.002) {
@@ -269,9 +273,10 @@ void moveScene(SimulationSettings& s, const Vec3& offset) {
 
 /// Front (m, from the tank's inner wall at x = 0) of a small dam break (1 cm spacing) at
 /// 0.12 s, mid-way to the far wall, with the whole scene moved by `offset`.
-double damBreakFront(const Vec3& offset) {
+double damBreakFront(FluidSolver solver, const Vec3& offset) {
   SimulationSettings s =
       tankScene(Vec3(0.4, 0.3, 0.04), {Vec3::Zero(), Vec3(0.1, 0.2, 0.04), Vec3::Zero()}, 0.005);
+  s.solver = solver;
   moveScene(s, offset);
   Simulation sim(s);
   runWithoutPenetration(sim, 0.12);
@@ -283,10 +288,12 @@ double damBreakFront(const Vec3& offset) {
 }
 
 /// Mean pressure (Pa) of the particles in the lowest 3 cm of a 10 cm column (1 cm
-/// spacing) settled for 0.3 s, averaged over the next 0.1 s, the scene moved by `offset`.
-double settledBottomPressure(const Vec3& offset) {
+/// spacing) settled for 0.3 s, averaged over the next 0.1 s, the scene moved by `offset`
+/// (the pressure a frame gives: the divergence-free solver's running mean).
+double settledBottomPressure(FluidSolver solver, const Vec3& offset) {
   SimulationSettings s =
       tankScene(Vec3(0.04, 0.15, 0.04), {Vec3::Zero(), Vec3(0.04, 0.1, 0.04), Vec3::Zero()}, 0.005);
+  s.solver = solver;
   moveScene(s, offset);
   Simulation sim(s);
   double sum = 0.0;
@@ -294,9 +301,10 @@ double settledBottomPressure(const Vec3& offset) {
   for (int k = 0; k <= 20; ++k) {
     runWithoutPenetration(sim, 0.3 + 0.005 * k);
     const FluidState& st = sim.fluid().state();
+    const std::vector<double>& pressure = st.keepsPressureMean() ? st.pressure_mean : st.pressure;
     for (std::size_t i = 0; i < st.size(); ++i)
       if (st.position[i].y() - offset.y() < 0.03) {
-        sum += st.pressure[i];
+        sum += pressure[i];
         ++count;
       }
   }
@@ -306,13 +314,15 @@ double settledBottomPressure(const Vec3& offset) {
 
 }  // namespace
 
-TEST(Precision, ScenesFarFromTheOriginMatchTheSameAtIt) {
+TEST_P(Precision, ScenesFarFromTheOriginMatchTheSameAtIt) {
   // Positions, pair distances and sums are double: 100 m from the origin a double still
   // resolves 1.4e-14 m, so the same scene there must give the same dam-break front and
   // the same hydrostatic pressure (within 1 %) as at the origin.
   const Vec3 far(100.0, 0.0, 100.0);
-  const double front = damBreakFront(Vec3::Zero()), front_far = damBreakFront(far);
-  const double p = settledBottomPressure(Vec3::Zero()), p_far = settledBottomPressure(far);
+  const double front = damBreakFront(solver(), Vec3::Zero()),
+               front_far = damBreakFront(solver(), far);
+  const double p = settledBottomPressure(solver(), Vec3::Zero()),
+               p_far = settledBottomPressure(solver(), far);
   std::printf(
       "[ precision ] front at 0.12 s %.4f / %.4f m; settled bottom pressure %.1f / %.1f "
       "Pa (rho g h at 1.5 cm below 10 cm: %.1f Pa)\n",
@@ -334,9 +344,11 @@ constexpr double kSyrup = 1e-3;
 /// Fluid block dropped onto a ramp tilted 25 degrees; returns the downhill distance its
 /// centroid travelled after `t` seconds. max_dt bounds the step; `min_dt` (if given)
 /// receives the smallest step taken before the last one.
-double slideDistance(double slip, double t, double max_dt = 1e-3, double* min_dt = nullptr) {
+double slideDistance(FluidSolver solver, double slip, double t, double max_dt = 1e-3,
+                     double* min_dt = nullptr) {
   const double r = 0.005;
   SimulationSettings s;
+  s.solver = solver;
   s.fluid.particle_radius = r;
   s.fluid.kinematic_viscosity = kSyrup;
   s.max_dt = max_dt;
@@ -362,10 +374,10 @@ double slideDistance(double slip, double t, double max_dt = 1e-3, double* min_dt
 
 }  // namespace
 
-TEST(Slip, FreeSlipSlidesFurtherThanNoSlip) {
+TEST_P(Slip, FreeSlipSlidesFurtherThanNoSlip) {
   const double t = 0.3;
-  const double free_slip = slideDistance(1.0, t);
-  const double no_slip = slideDistance(0.0, t);
+  const double free_slip = slideDistance(solver(), 1.0, t);
+  const double no_slip = slideDistance(solver(), 0.0, t);
   std::printf("[ slip ] downhill distance after %.2f s: eps=1 %.4f m, eps=0 %.4f m\n", t, free_slip,
               no_slip);
   // Frictionless sliding: a = g sin(25 deg) once on the ramp.
@@ -373,14 +385,14 @@ TEST(Slip, FreeSlipSlidesFurtherThanNoSlip) {
   EXPECT_GT(free_slip, 0.05);
 }
 
-TEST(Slip, HalfSlipLiesBetweenAndNoSlipDoesNotDependOnTheStep) {
+TEST_P(Slip, HalfSlipLiesBetweenAndNoSlipDoesNotDependOnTheStep) {
   // eps is a property of the wall: the same travel with steps 2x and 4x smaller than the
   // CFL step; eps = 0.5 clearly between no-slip and free slip.
   const double t = 0.3;
   double cfl_dt = 0;
-  const double none = slideDistance(0.0, t, 1e-3, &cfl_dt);
-  const double half = slideDistance(0.5, t);
-  const double free_slip = slideDistance(1.0, t);
+  const double none = slideDistance(solver(), 0.0, t, 1e-3, &cfl_dt);
+  const double half = slideDistance(solver(), 0.5, t);
+  const double free_slip = slideDistance(solver(), 1.0, t);
   const double share = (half - none) / (free_slip - none);
   std::printf("[ slip ] eps=0 %.4f m, eps=0.5 %.4f m, eps=1 %.4f m: eps=0.5 is %.0f%% of the way\n",
               none, half, free_slip, 100 * share);
@@ -389,7 +401,7 @@ TEST(Slip, HalfSlipLiesBetweenAndNoSlipDoesNotDependOnTheStep) {
   for (const double factor : {2.0, 4.0}) {
     for (const double eps : {0.0, 0.5}) {
       const double base = eps == 0.0 ? none : half;
-      const double fine = slideDistance(eps, t, cfl_dt / factor);
+      const double fine = slideDistance(solver(), eps, t, cfl_dt / factor);
       std::printf("[ slip ] eps=%.1f, step <= CFL step / %.0f: %.4f m (%+.2f%% of the travel)\n",
                   eps, factor, fine, 100 * (fine - base) / base);
       EXPECT_LT(std::abs(fine - base), 0.05 * base) << "eps " << eps << ", dt / " << factor;
@@ -401,9 +413,10 @@ namespace {
 
 /// Drops fluid onto a static floor and returns the largest upward centroid velocity seen
 /// after the first touch, relative to the impact speed.
-double reboundRatio(double restitution, const FluidBlock& block, double t_end) {
+double reboundRatio(FluidSolver solver, double restitution, const FluidBlock& block, double t_end) {
   const double r = 0.005;
   SimulationSettings s;
+  s.solver = solver;
   s.fluid.particle_radius = r;
   s.gravity = Vec3(0, -9.81, 0);
   s.bodies.push_back(staticBody("floor", makeBox(Vec3(0.15, 0.02, 0.15)), 0.0, restitution,
@@ -426,9 +439,10 @@ double reboundRatio(double restitution, const FluidBlock& block, double t_end) {
 namespace {
 
 /// Drops `block` with restitution 1 and 0: it rebounds at its impact speed, or not at all.
-void expectReboundOnlyWithRestitution(const char* what, const FluidBlock& block) {
-  const double elastic = reboundRatio(1.0, block, 0.2);
-  const double inelastic = reboundRatio(0.0, block, 0.2);
+void expectReboundOnlyWithRestitution(FluidSolver solver, const char* what,
+                                      const FluidBlock& block) {
+  const double elastic = reboundRatio(solver, 1.0, block, 0.2);
+  const double inelastic = reboundRatio(solver, 0.0, block, 0.2);
   std::printf("[ restitution ] %s: rebound/impact delta=1 %.3f, delta=0 %.3f\n", what, elastic,
               inelastic);
   EXPECT_GT(elastic, 0.9) << what;
@@ -437,17 +451,18 @@ void expectReboundOnlyWithRestitution(const char* what, const FluidBlock& block)
 
 }  // namespace
 
-TEST(Restitution, SingleParticleBouncesOnlyWithRestitution) {
+TEST_P(Restitution, SingleParticleBouncesOnlyWithRestitution) {
   expectReboundOnlyWithRestitution(
-      "one particle", {Vec3(-0.005, 0.05, -0.005), Vec3(0.005, 0.06, 0.005), Vec3::Zero()});
+      solver(), "one particle",
+      {Vec3(-0.005, 0.05, -0.005), Vec3(0.005, 0.06, 0.005), Vec3::Zero()});
 }
 
-TEST(Restitution, ParticleSheetReboundsWithDeltaOneAndNotWithZero) {
+TEST_P(Restitution, ParticleSheetReboundsWithDeltaOneAndNotWithZero) {
   // A block one particle thick (8 x 1 x 8): every particle meets the floor, so the block's
   // rebound is the boundary's restitution. (In thicker blocks only the touching layer is
   // reflected and the fluid's own pressure response dominates the rebound.)
   expectReboundOnlyWithRestitution(
-      "sheet", {Vec3(-0.04, 0.03, -0.04), Vec3(0.04, 0.04, 0.04), Vec3::Zero()});
+      solver(), "sheet", {Vec3(-0.04, 0.03, -0.04), Vec3(0.04, 0.04, 0.04), Vec3::Zero()});
 }
 
 TEST_P(Solvers, WaterInATankWithoutGravityStaysAtRest) {

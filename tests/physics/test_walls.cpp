@@ -14,11 +14,18 @@ using namespace wake;
 using wake::test::runWithoutPenetration;
 using wake::test::staticBody;
 
-TEST(Viscosity, StokesFirstProblemProfileNextToAMovingPlate) {
+class Viscosity : public test::SolverTest {};
+class NoSlipWall : public test::SolverTest {};
+
+INSTANTIATE_TEST_SUITE_P(, Viscosity, test::kSolvers, test::solverName);
+INSTANTIATE_TEST_SUITE_P(, NoSlipWall, test::kSolvers, test::solverName);
+
+TEST_P(Viscosity, StokesFirstProblemProfileNextToAMovingPlate) {
   // A plate (kinematic, top face at y = 0) set moving at U under fluid at rest, no gravity:
   // u(y, t) = U erfc(y / (2 sqrt(nu t))), y the height above the plate's surface.
   const double r = 0.005, nu = 1e-2, U = 0.05;
   SimulationSettings s;
+  s.solver = solver();
   s.gravity = Vec3::Zero();
   s.fluid.particle_radius = r;
   s.fluid.kinematic_viscosity = nu;
@@ -67,9 +74,10 @@ namespace {
 /// Time (s) until the lowest particle of a film `layers` particles thick, 10 cm tall, its
 /// bottom `height` above the floor, lying against a vertical no-slip wall, reaches the
 /// floor (or `limit`).
-double filmFallTime(int layers, double height, double limit) {
+double filmFallTime(FluidSolver solver, int layers, double height, double limit) {
   const double r = 0.005;
   SimulationSettings s;
+  s.solver = solver;
   s.fluid.particle_radius = r;  // water: kinematic viscosity 1e-6 m^2/s
   s.blocks.push_back(
       {Vec3(0, height, -0.03), Vec3(2 * r * layers, height + 0.1, 0.03), Vec3::Zero()});
@@ -92,13 +100,13 @@ double filmFallTime(int layers, double height, double limit) {
 
 }  // namespace
 
-TEST(NoSlipWall, FilmOnAVerticalWallFallsToTheFloor) {
+TEST_P(NoSlipWall, FilmOnAVerticalWallFallsToTheFloor) {
   // Water does not hang on a no-slip wall: a film one or two particles thick reaches the
   // floor within three times its free-fall time.
   const double height = 0.2, g = 9.81;
   const double free_fall = std::sqrt(2 * height / g);
   for (const int layers : {1, 2}) {
-    const double t = filmFallTime(layers, height, 3 * free_fall + 0.05);
+    const double t = filmFallTime(solver(), layers, height, 3 * free_fall + 0.05);
     std::printf("[ film ] %d layer(s): floor reached after %.3f s (free fall %.3f s)\n", layers, t,
                 free_fall);
     EXPECT_LT(t, 3 * free_fall) << layers << " layer(s)";
