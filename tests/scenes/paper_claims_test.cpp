@@ -385,8 +385,9 @@ TEST(PenaltyBaseline, DirectForcingKeepsFluidOutAndAtASteadyDistance) {
 
 // --- Flotsam (Fig. 12) ------------------------------------------------------------------
 
-TEST(Flotsam, MeshesRideTheWaveAndFloat) {
-  const SceneOutput out("flotsam");
+/// `scene`: "flotsam" or its divergence-free copy.
+void checkFlotsamRidesTheWave(const std::string& scene) {
+  const SceneOutput out(scene);
   EXPECT_EQ(out.summary()["max_penetrating"].get<int>(), 0);
   for (const char* name : {"ring_buoy", "barrel", "rock", "boat"}) {
     const test::BodyTrack& t = out.body(name);
@@ -396,11 +397,18 @@ TEST(Flotsam, MeshesRideTheWaveAndFloat) {
     double furthest = x0.x();
     for (const Pose& p : t.pose)
       furthest = std::max(furthest, p.position.x());
-    std::printf("[ flotsam ] %s: x %.3f -> furthest %.3f -> %.3f m, y %.3f -> %.3f m\n", name,
-                x0.x(), furthest, x1.x(), x0.y(), x1.y());
+    std::printf("[ %s ] %s: x %.3f -> furthest %.3f -> %.3f m, y %.3f -> %.3f m\n", scene.c_str(),
+                name, x0.x(), furthest, x1.x(), x0.y(), x1.y());
     EXPECT_GT(furthest, x0.x() + 0.2) << name << " was not carried by the wave";
     EXPECT_GT(x1.y(), 0.09) << name << " is not afloat";
   }
+}
+
+TEST(Flotsam, MeshesRideTheWaveAndFloat) {
+  checkFlotsamRidesTheWave("flotsam");
+}
+TEST(Flotsam, DivergenceFreeMeshesRideTheWaveAndFloat) {
+  checkFlotsamRidesTheWave("flotsam_dfsph");
 }
 
 }  // namespace
