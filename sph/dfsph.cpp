@@ -28,6 +28,21 @@ int latticeNeighbors(const FluidParams& f) {
 }
 
 /// The largest |g_ab| = m |grad W| of any pair (m times the kernel's steepest slope).
+/// sum_b |g_ab|^2 over a full neighbourhood on the cubic lattice of `spacing`.
+double latticeWeight(const CubicSplineKernel& kernel, double mass, double spacing) {
+  const int reach = static_cast<int>(std::ceil(kernel.supportRadius() / spacing));
+  double sum = 0.0;
+  for (int i = -reach; i <= reach; ++i)
+    for (int j = -reach; j <= reach; ++j)
+      for (int k = -reach; k <= reach; ++k) {
+        const double r = spacing * std::sqrt(double(i * i + j * j + k * k));
+        if (r <= 0.0 || r >= kernel.supportRadius()) continue;
+        const double g = mass * kernel.derivativeOverR(r) * r;
+        sum += g * g;
+      }
+  return sum;
+}
+
 double largestGradient(const CubicSplineKernel& kernel, double mass) {
   double most = 0.0;
   const int samples = 2000;
@@ -372,6 +387,7 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
   factor_.resize(n);
   grad_sum_.resize(n);
   sparse_.resize(n);
+  held_.resize(n);
   weight_.resize(n);
   centre_.resize(n);
   count_.resize(n);
@@ -385,6 +401,8 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
   enough_neighbors_ =
       static_cast<std::uint32_t>(std::ceil(0.75 * latticeNeighbors(fluid.params())));
   largest_gradient_ = largestGradient(kernel, fluid.particleMass());
+  denominator_floor_ =
+      kFactorFloor * latticeWeight(kernel, fluid.particleMass(), fluid.params().spacing());
   if (params_.correct_gradient) {
     moment_.resize(6 * n);
     // The particles' second moments: a pass over their rows (a gather of the neighbours'
@@ -614,8 +632,16 @@ void DivergenceFreeSolver::computeFactors() {
     const Vec3 g = grad_sum_[i] + wall;
     const double denominator =
         std::max(g.dot(correction_ * grad_sum_[i] + 1.5 * wall), 0.0) + mean_scale * weight_[i];
-    // A particle with (almost) no neighbours has no pressure to find.
-    factor_[i] = denominator > factor_floor_ ? 1.0 / denominator : 0.0;
+    // A particle with (almost) no neighbours has no pressure to find; one at walls whose
+    // own pressure barely acts on it (walls on opposite sides) is held at the floor
+    // (kFactorFloor). A lone particle away from walls keeps its factor: a drop's or the
+    // free surface's (the floor there let a surface particle of a column at rest at r =
+    // 4 mm jump at 0.12 m/s).
+    const bool walled = b && b->neighbors[i] > 0;
+    held_[i] = walled && denominator < denominator_floor_;
+    factor_[i] = denominator <= factor_floor_ ? 0.0
+                 : held_[i]                   ? 1.0 / denominator_floor_
+                                              : 1.0 / denominator;
     const std::uint32_t around = count_[i] + (b ? b->neighbors[i] : 0u);
     sparse_[i] = around < enough_neighbors_;
     // The fluid around a, a itself weighing as much as its neighbours together.
@@ -851,14 +877,16 @@ int DivergenceFreeSolver::solveDensity(Fluid& fluid, const Vec3& gravity, double
   applyHydrostatic(fluid, gravity, dt);
   if (bodies) seeBodies(fluid, dt, true);
   const double scale = 1.0 / (double(n) * rho0);
+  const double most = kMaxCorrection * rho0;  // compression counted per particle and step  //
+                                              // compression counted per particle and step
   int iterations = 0;
   for (;;) {
     densityRates(fluid);
     if (bodies) ratesWithBodies();
     // Each particle's pressure grows by what removes its own compression at the step's end.
     const double error = scale * chunkedSum(n, [&](std::size_t i) {
-                           const double excess =
-                               std::max(0.0, st.density[i] + dt * rate_[i] - rho0);
+                           const double over = std::max(0.0, st.density[i] + dt * rate_[i] - rho0);
+                           const double excess = held_[i] ? std::min(over, most) : over;
                            ds_[i] = excess * factor_[i] * inv_dt;
                            return excess;
                          });
