@@ -14,35 +14,38 @@ namespace wake {
 
 namespace {
 
-/// Neighbours of a particle inside a fluid at rest on the lattice (spacing s, support 2H):
-/// the lattice points closer than the support, itself left out.
-int latticeNeighbors(const FluidParams& f) {
-  const double reach = f.supportRadius() / f.spacing();
+/// Calls f(d) for each point of the fluid's lattice (spacing s) closer to a particle than
+/// the support, d its distance; the particle itself left out.
+template <class F>
+void forEachLatticeNeighbor(const FluidParams& p, F&& f) {
+  const double reach = p.supportRadius() / p.spacing();
   const int k = static_cast<int>(std::ceil(reach));
-  int count = 0;
   for (int x = -k; x <= k; ++x)
     for (int y = -k; y <= k; ++y)
-      for (int z = -k; z <= k; ++z)
-        count += (x * x + y * y + z * z < reach * reach) ? 1 : 0;
-  return count - 1;
+      for (int z = -k; z <= k; ++z) {
+        const int d2 = x * x + y * y + z * z;
+        if (d2 > 0 && d2 < reach * reach) f(p.spacing() * std::sqrt(double(d2)));
+      }
 }
 
-/// The largest |g_ab| = m |grad W| of any pair (m times the kernel's steepest slope).
-/// sum_b |g_ab|^2 over a full neighbourhood on the cubic lattice of `spacing`.
-double latticeWeight(const CubicSplineKernel& kernel, double mass, double spacing) {
-  const int reach = static_cast<int>(std::ceil(kernel.supportRadius() / spacing));
+/// Neighbours of a particle inside a fluid at rest on the lattice (spacing s, support 2H).
+int latticeNeighbors(const FluidParams& p) {
+  int count = 0;
+  forEachLatticeNeighbor(p, [&](double) { ++count; });
+  return count;
+}
+
+/// sum_b |g_ab|^2 over such a particle's neighbours on the lattice.
+double latticeWeight(const FluidParams& p, const CubicSplineKernel& kernel, double mass) {
   double sum = 0.0;
-  for (int i = -reach; i <= reach; ++i)
-    for (int j = -reach; j <= reach; ++j)
-      for (int k = -reach; k <= reach; ++k) {
-        const double r = spacing * std::sqrt(double(i * i + j * j + k * k));
-        if (r <= 0.0 || r >= kernel.supportRadius()) continue;
-        const double g = mass * kernel.derivativeOverR(r) * r;
-        sum += g * g;
-      }
+  forEachLatticeNeighbor(p, [&](double r) {
+    const double g = mass * kernel.derivativeOverR(r) * r;
+    sum += g * g;
+  });
   return sum;
 }
 
+/// The largest |g_ab| = m |grad W| of any pair (m times the kernel's steepest slope).
 double largestGradient(const CubicSplineKernel& kernel, double mass) {
   double most = 0.0;
   const int samples = 2000;
@@ -401,8 +404,7 @@ void DivergenceFreeSolver::prepare(const Fluid& fluid, const SolverBoundary& bou
   enough_neighbors_ =
       static_cast<std::uint32_t>(std::ceil(0.75 * latticeNeighbors(fluid.params())));
   largest_gradient_ = largestGradient(kernel, fluid.particleMass());
-  denominator_floor_ =
-      kFactorFloor * latticeWeight(kernel, fluid.particleMass(), fluid.params().spacing());
+  denominator_floor_ = kFactorFloor * latticeWeight(fluid.params(), kernel, fluid.particleMass());
   if (params_.correct_gradient) {
     moment_.resize(6 * n);
     // The particles' second moments: a pass over their rows (a gather of the neighbours'
@@ -877,8 +879,7 @@ int DivergenceFreeSolver::solveDensity(Fluid& fluid, const Vec3& gravity, double
   applyHydrostatic(fluid, gravity, dt);
   if (bodies) seeBodies(fluid, dt, true);
   const double scale = 1.0 / (double(n) * rho0);
-  const double most = kMaxCorrection * rho0;  // compression counted per particle and step  //
-                                              // compression counted per particle and step
+  const double most = kMaxCorrection * rho0;  // compression counted per particle and step
   int iterations = 0;
   for (;;) {
     densityRates(fluid);
