@@ -142,10 +142,6 @@ struct RunCounters {
   std::uint64_t divergence_iterations = 0;  ///< Dfsph: divergence solve iterations, all steps
 };
 
-/// Everything of a run that changes from step to step (what a checkpoint holds): with a
-/// Simulation built again from the same settings, restoreState() continues the run bit
-/// for bit. The fluid's arrays are in the simulation's current slot order (not id order):
-/// the order decides the order of sums, so it is part of the state.
 /// What changes during a run on the fluid's side, in the one place Simulation keeps it
 /// (the bodies' states are the rigid-body side's). The fluid's arrays are in the
 /// simulation's current slot order (not id order): the order decides the order of sums,
