@@ -1,5 +1,8 @@
 #include "coupling/boundary.hpp"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
 #include <omp.h>
 
 #include <algorithm>
@@ -31,13 +34,17 @@ double wallShearFactor(double eps) {
 
 }  // namespace
 
-Boundaries::Boundaries(const FluidParams& fluid, const Aabb& domain)
+Boundaries::Boundaries(const FluidParams& fluid, const Aabb& domain, double contact_fraction)
     : fluid_(fluid),
       kernel_(fluid.smoothingLength()),
       domain_(domain),
       spacing_(fluid.spacing()),
       radius_(fluid.particle_radius),
-      volume_scale_(spacing_ * spacing_ * spacing_ * flatLatticeKernelSum(kernel_, spacing_)) {}
+      contact_distance_(contact_fraction * fluid.particle_radius),
+      volume_scale_(spacing_ * spacing_ * spacing_ * flatLatticeKernelSum(kernel_, spacing_)) {
+  if (!(contact_fraction > 0.0 && contact_fraction <= 1.0))
+    throw std::invalid_argument("Boundaries: contact_fraction must be in (0, 1]");
+}
 
 std::size_t Boundaries::addBody(const BodySettings& settings) {
   if (finalized_) throw std::logic_error("Boundaries::addBody after finalize()");
@@ -134,7 +141,7 @@ BodyPlacement Boundaries::placeAtStart() const {
 
 void Boundaries::buildSet(SampleSet& set, const Aabb& box, const std::vector<Vec3>& pos,
                           const std::vector<Vec3>& nrm, const std::vector<std::uint32_t>& body,
-                          bool flags) {
+                          bool flags, const std::vector<double>* area) {
   // Cells of half the support: the density share searches 2 cells around a particle,
   // contacts (reach r_f + r_b = half the support) only 1. Too many cells: full support.
   const double support = kernel_.supportRadius();
@@ -164,7 +171,9 @@ void Boundaries::buildSet(SampleSet& set, const Aabb& box, const std::vector<Vec
   set.position.resize(total);
   set.normal.resize(total);
   set.body.resize(total);
+  set.area.assign(area ? total : 0, 0.0);
   for (std::size_t k = 0; k < total; ++k) {
+    if (area) set.area[k] = (*area)[order[k]];
     set.position[k] = pos[order[k]];
     set.normal[k] = nrm[order[k]];
     set.body[k] = body[order[k]];
@@ -196,6 +205,24 @@ void Boundaries::buildSet(SampleSet& set, const Aabb& box, const std::vector<Vec
   set.near.assign(set.grid.cellCount(), 0);
   markNear(set, set.density_reach, kNearDensity, set.near);
   markNear(set, set.contact_reach, kNearContact, set.near);
+}
+
+void Boundaries::balanceAreas(SurfaceSamples& samples) {
+  // The smallest change of the areas (least squares, A_k - lambda . n_k) for which
+  // sum_k A_k n_k = 0, as it is for the exact closed surface: the sampling's own imbalance
+  // (a Fibonacci sphere's, a compound's trimmed children) times the fluid's whole pressure
+  // would push a body at rest.
+  Vec3 imbalance = Vec3::Zero();
+  Mat3 normals = Mat3::Zero();
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    imbalance += samples.area[k] * samples.normal[k];
+    normals += samples.normal[k] * samples.normal[k].transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Mat3> eigen(normals);
+  if (!(eigen.eigenvalues().minCoeff() > 1e-9 * eigen.eigenvalues().maxCoeff())) return;
+  const Vec3 lambda = normals.ldlt().solve(imbalance);
+  for (std::size_t k = 0; k < samples.size(); ++k)
+    samples.area[k] = std::max(0.0, samples.area[k] - lambda.dot(samples.normal[k]));
 }
 
 void Boundaries::markNear(const SampleSet& set, int reach, std::uint8_t bit,
@@ -299,9 +326,10 @@ void Boundaries::finalize() {
     Aabb box;
     for (const Vec3& p : b.local.position)
       box.extend(p);
+    if (std::isfinite(b.settings.shape->volume())) balanceAreas(b.local);
     if (!box.empty()) {
       buildSet(m.samples, box, b.local.position, b.local.normal,
-               std::vector<std::uint32_t>(b.local.size(), m.body), /*flags=*/true);
+               std::vector<std::uint32_t>(b.local.size(), m.body), /*flags=*/true, &b.local.area);
       markInterior(m.samples, b);
     }
     b.local = {};  // its memory too
@@ -379,12 +407,12 @@ void Boundaries::forEachBodyDistance(const Vec3& x, const BodyPlacement& at, F&&
 
 std::size_t Boundaries::findContacts(const Vec3& x, const BodyPlacement& at,
                                      std::array<Contact, kMaxContacts>& out) const {
-  // A body is in contact when x is closer than the fluid radius to its exact surface: the
-  // same test as the position correction and the penetration count, so that velocity
-  // control stops fluid before the correction would have to move it (a correction of a
-  // particle that control let through does work against the pressure: it pumps energy
-  // into the fluid). Sample cells only say where a surface may be near.
-  const double rf = radius_;
+  // A body is in contact when x is closer than the contact distance to its exact surface:
+  // the same test as the position correction, so that velocity control stops fluid before
+  // the correction would have to move it (a correction of a particle that control let
+  // through does work against the pressure: it pumps energy into the fluid). Sample cells
+  // only say where a surface may be near.
+  const double rf = contact_distance_;
   std::size_t count = 0;
   auto offer = [&](std::uint32_t body, double d) {
     if (!(d < rf)) return;

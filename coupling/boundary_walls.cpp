@@ -140,56 +140,40 @@ inline double wallTerms(const WallSumsIn& in, const std::uint32_t* idx, std::siz
 template <class L>
 inline Vec3 pressureTerms(const Vec3* position, const double* volume, const double* p_rho2,
                           const CubicSplineKernel& kernel, double support_sq, const Vec3& p,
-                          double pr2, const std::uint32_t* near, std::size_t count, Vec3* moment) {
+                          double pr2, const std::uint32_t* near, std::size_t count) {
   double sx = 0.0, sy = 0.0, sz = 0.0;
-  double mx = 0.0, my = 0.0, mz = 0.0;
-  if (moment) mx = moment->x(), my = moment->y(), mz = moment->z();
   forEachNeighborGroup<L>(near, 0, count, [&](auto lanes, const std::uint32_t* j, int used) {
     using M = decltype(lanes);
     constexpr int kW = M::kWidth;
     const GroupOffsets<M> o = offsetsFrom<M>(p, position, j);
-    const M &xk = o.x, &yk = o.y, &zk = o.z, &dx = o.dx, &dy = o.dy, &dz = o.dz, &d_sq = o.d_sq;
     const M c = (M::all(pr2) + gatherLanes(lanes, p_rho2, j)) * gatherLanes(lanes, volume, j) *
-                kernel.derivativeOverR(sqrt(d_sq));
-    const M gx = c * dx, gy = c * dy, gz = c * dz;
-    alignas(32) double far[kW], g[3][kW], m[3][kW];
-    (d_sq >= M::all(support_sq)).store(far);
-    gx.store(g[0]);
-    gy.store(g[1]);
-    gz.store(g[2]);
-    if (moment) {
-      (yk * gz - zk * gy).store(m[0]);
-      (zk * gx - xk * gz).store(m[1]);
-      (xk * gy - yk * gx).store(m[2]);
-    }
+                kernel.derivativeOverR(sqrt(o.d_sq));
+    alignas(32) double far[kW], g[3][kW];
+    (o.d_sq >= M::all(support_sq)).store(far);
+    (c * o.dx).store(g[0]);
+    (c * o.dy).store(g[1]);
+    (c * o.dz).store(g[2]);
     for (int t = 0; t < used; ++t) {
       if (laneSet(far[t])) continue;
       sx += g[0][t];
       sy += g[1][t];
       sz += g[2][t];
-      if (!moment) continue;
-      mx += m[0][t];
-      my += m[1][t];
-      mz += m[2][t];
     }
   });
-  if (moment) *moment = Vec3(mx, my, mz);
   return Vec3(sx, sy, sz);
 }
 
 Vec3 pressureTerms2(const Vec3* position, const double* volume, const double* p_rho2,
                     const CubicSplineKernel& kernel, double support_sq, const Vec3& p, double pr2,
-                    const std::uint32_t* near, std::size_t count, Vec3* moment) {
-  return pressureTerms<Lanes2>(position, volume, p_rho2, kernel, support_sq, p, pr2, near, count,
-                               moment);
+                    const std::uint32_t* near, std::size_t count) {
+  return pressureTerms<Lanes2>(position, volume, p_rho2, kernel, support_sq, p, pr2, near, count);
 }
 #if defined(WAKE_HAS_LANES4)
 WAKE_TARGET_AVX Vec3 pressureTerms4(const Vec3* position, const double* volume,
                                     const double* p_rho2, const CubicSplineKernel& kernel,
                                     double support_sq, const Vec3& p, double pr2,
-                                    const std::uint32_t* near, std::size_t count, Vec3* moment) {
-  return pressureTerms<Lanes4>(position, volume, p_rho2, kernel, support_sq, p, pr2, near, count,
-                               moment);
+                                    const std::uint32_t* near, std::size_t count) {
+  return pressureTerms<Lanes4>(position, volume, p_rho2, kernel, support_sq, p, pr2, near, count);
 }
 #endif
 
@@ -376,15 +360,14 @@ double Boundaries::wallSums(const SampleSet& set, const Vec3& p, double nu, cons
 }
 
 Vec3 Boundaries::pressureSum(const SampleSet& set, const std::vector<double>& p_rho2, const Vec3& p,
-                             double pr2, const std::uint32_t* near, std::size_t count,
-                             Vec3* moment) const {
+                             double pr2, const std::uint32_t* near, std::size_t count) const {
   auto terms = pressureTerms2;
 #if defined(WAKE_HAS_LANES4)
   if (wide_lanes_) terms = pressureTerms4;
 #endif
   const double support = kernel_.supportRadius();
   return terms(set.position.data(), set.volume.data(), p_rho2.data(), kernel_, support * support, p,
-               pr2, near, count, moment);
+               pr2, near, count);
 }
 
 void Boundaries::wallPass(const Fluid& fluid, const BodyPlacement& at, std::vector<double>& density,
@@ -485,7 +468,7 @@ void Boundaries::wallPass(const Fluid& fluid, const BodyPlacement& at, std::vect
 
 void Boundaries::addWallPressure(const Fluid& fluid, const BodyPlacement& at,
                                  const WallPairs& pairs, const SamplePressure& pressure,
-                                 std::vector<Vec3>& extra, std::vector<Wrench>& reaction) const {
+                                 std::vector<Vec3>& extra) const {
   const FluidState& st = fluid.state();
   const std::size_t n = st.size(), nb = bodies_.size();
   if (n == 0 || nb == 0) return;
@@ -498,50 +481,51 @@ void Boundaries::addWallPressure(const Fluid& fluid, const BodyPlacement& at,
     throw std::logic_error("Boundaries::addWallPressure before addWallTerms");
   if (extra.empty()) extra.assign(n, Vec3::Zero());
   const double rho0 = fluid_.rest_density;
-  const double mass = fluid.particleMass();
-  bool two_way = false;
-  for (const MovingBody& m : moving_)
-    two_way = two_way || bodies_[m.body].settings.twoWay();
-  const std::size_t chunks = (n + kChunk - 1) / kChunk;
-  if (two_way) chunk_reaction_.assign(chunks * nb, Wrench{});
+  const std::int64_t sn = static_cast<std::int64_t>(n);
 #pragma omp parallel for schedule(static)
-  for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
-    const std::size_t end = std::min(n, (c + 1) * kChunk);
-    for (std::size_t i = c * kChunk; i < end; ++i) {
-      const Vec3 xi = st.position[i];
-      const double pr2 = st.pressure[i] / (st.density[i] * st.density[i]);
-      Vec3 a = Vec3::Zero();
-      // The segments of addWallTerms: the static set first, then the moving bodies.
-      pairs.forEachSegment(
-          i, c, c * kChunk, [&](std::uint32_t set, const std::uint32_t* near, std::uint32_t count) {
-            if (set == 0) {
-              a -= pressureSum(static_, p_rho2[0], xi, pr2, near, count, nullptr);
-              return;
-            }
-            const MovingBody& m = moving_[set - 1];
-            const BodyFrame& f = at[m.body];
-            const Vec3 p = f.rotation.transpose() * (xi - f.pose.position);
-            const bool react = bodies_[m.body].settings.twoWay();
-            Vec3 moment = Vec3::Zero();
-            const Vec3 sum = f.rotation * pressureSum(m.samples, p_rho2[set], p, pr2, near, count,
-                                                      react ? &moment : nullptr);
-            a -= sum;
-            if (react) {
-              Wrench& w = chunk_reaction_[c * nb + m.body];
-              w.force += (mass * rho0) * sum;
-              w.torque += (mass * rho0) * (f.rotation * moment);
-            }
-          });
-      extra[i] += rho0 * a;
-    }
+  for (std::int64_t i = 0; i < sn; ++i) {
+    const std::size_t c = static_cast<std::size_t>(i) / kChunk;
+    const Vec3 xi = st.position[i];
+    const double pr2 = st.pressure[i] / (st.density[i] * st.density[i]);
+    Vec3 a = Vec3::Zero();
+    // The segments of addWallTerms: the static set first, then the moving bodies.
+    pairs.forEachSegment(
+        i, c, c * kChunk, [&](std::uint32_t set, const std::uint32_t* near, std::uint32_t count) {
+          if (set == 0) {
+            a -= pressureSum(static_, p_rho2[0], xi, pr2, near, count);
+            return;
+          }
+          const MovingBody& m = moving_[set - 1];
+          const BodyFrame& f = at[m.body];
+          const Vec3 p = f.rotation.transpose() * (xi - f.pose.position);
+          a -= f.rotation * pressureSum(m.samples, p_rho2[set], p, pr2, near, count);
+        });
+    extra[i] += rho0 * a;
   }
-  if (!two_way) return;
-  // Fixed order (chunks): the same bits on any number of threads.
-  for (std::size_t c = 0; c < chunks; ++c)
-    for (std::size_t b = 0; b < nb; ++b) {
-      reaction[b].force += chunk_reaction_[c * nb + b].force;
-      reaction[b].torque += chunk_reaction_[c * nb + b].torque;
+}
+
+void Boundaries::addBodyPressure(const BodyPlacement& at, const SamplePressure& pressure,
+                                 std::vector<Wrench>& reaction) const {
+  for (std::size_t m = 0; m < moving_.size(); ++m) {
+    const MovingBody& mb = moving_[m];
+    if (!bodies_[mb.body].settings.twoWay()) continue;
+    const SampleSet& set = mb.samples;
+    const std::vector<double>& force = pressure.surface_force[m + 1];
+    if (force.size() != set.position.size())
+      throw std::logic_error("Boundaries::addBodyPressure before computeSamplePressure");
+    // In body space, in the samples' (fixed) order: the same bits on any number of threads.
+    Vec3 f = Vec3::Zero(), torque = Vec3::Zero();
+    for (std::size_t k = 0; k < set.position.size(); ++k) {
+      if (force[k] == 0.0) continue;  // dry: no fluid near
+      const Vec3& n = set.normal[k];
+      const Vec3 df = -force[k] * n;
+      f += df;
+      torque += (set.position[k] + radius_ * n).cross(df);
     }
+    const BodyFrame& frame = at[mb.body];
+    reaction[mb.body].force += frame.rotation * f;
+    reaction[mb.body].torque += frame.rotation * torque;
+  }
 }
 
 void Boundaries::transposePairs(WallPairs& pairs) const {
@@ -585,22 +569,50 @@ void Boundaries::computeSamplePressure(const Fluid& fluid, const BodyPlacement& 
     throw std::logic_error("Boundaries::computeSamplePressure before addWallTerms");
   transposePairs(pairs);
   out.p_rho2.resize(moving_.size() + 1);
-  samplePressure(fluid, static_, Mat3::Identity(), Vec3::Zero(), gravity, pairs.offset[0],
-                 pairs.particle[0], out.p_rho2[0]);
+  out.surface_force.resize(moving_.size() + 1);
+  samplePressure(fluid, static_, Mat3::Identity(), Vec3::Zero(), gravity, false, pairs.offset[0],
+                 pairs.particle[0], out.p_rho2[0], out.surface_force[0]);
   for (std::size_t m = 0; m < moving_.size(); ++m) {
     const BodyFrame& f = at[moving_[m].body];
     samplePressure(fluid, moving_[m].samples, f.rotation, f.pose.position, gravity,
-                   pairs.offset[m + 1], pairs.particle[m + 1], out.p_rho2[m + 1]);
+                   bodies_[moving_[m].body].settings.twoWay(), pairs.offset[m + 1],
+                   pairs.particle[m + 1], out.p_rho2[m + 1], out.surface_force[m + 1]);
   }
 }
 
+double Boundaries::surfaceForce(const FluidState& st, const SampleSet& set, std::size_t k,
+                                const Vec3& xk, const Vec3& normal, const Vec3& gravity,
+                                const std::uint32_t* particle, std::size_t count) const {
+  // The sample's pressure as computeSamplePressure's, from the fluid in front of its face
+  // only: a thin wall's sample has the fluid of the other side within its support too.
+  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
+  double w_sum = 0.0, p_sum = 0.0;
+  Vec3 rise = Vec3::Zero();
+  for (std::size_t t = 0; t < count; ++t) {
+    const std::uint32_t a = particle[t];
+    const Vec3 d = st.position[a] - xk;
+    const double d_sq = d.squaredNorm();
+    if (d_sq >= support_sq || !(d.dot(normal) > 0.0)) continue;
+    const double w = kernel_.value(std::sqrt(d_sq));
+    w_sum += w;
+    p_sum += st.pressure[a] * w;
+    rise -= (st.density[a] * w) * d;
+  }
+  if (!(w_sum > 0.0)) return 0.0;
+  // Carried from the sample, r_b below the surface, up to the surface point.
+  const double p =
+      (p_sum + gravity.dot(rise)) / w_sum + fluid_.rest_density * radius_ * gravity.dot(normal);
+  return std::max(0.0, p) * set.area[k];
+}
+
 void Boundaries::samplePressure(const Fluid& fluid, const SampleSet& set, const Mat3& rotation,
-                                const Vec3& origin, const Vec3& gravity,
+                                const Vec3& origin, const Vec3& gravity, bool two_way,
                                 const std::vector<std::uint32_t>& offset,
                                 const std::vector<std::uint32_t>& particle,
-                                std::vector<double>& p_rho2) const {
+                                std::vector<double>& p_rho2, std::vector<double>& force) const {
   const std::size_t n = set.position.size();
   p_rho2.assign(n, 0.0);
+  force.assign(two_way ? n : 0, 0.0);
   const FluidState& st = fluid.state();
   if (st.size() == 0 || n == 0) return;
   const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
@@ -622,6 +634,9 @@ void Boundaries::samplePressure(const Fluid& fluid, const SampleSet& set, const 
     if (p == 0.0) continue;
     const double rho = fluid_.densityAt(p);
     p_rho2[k] = p / (rho * rho);
+    if (two_way)
+      force[k] = surfaceForce(st, set, k, xk, rotation * set.normal[k], gravity,
+                              particle.data() + offset[k], offset[k + 1] - offset[k]);
   }
 }
 

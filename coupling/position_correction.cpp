@@ -59,12 +59,12 @@ bool escape(const Boundaries& boundaries, const BodyPlacement& at, Vec3& x) {
   // body wins (its point of most clearance); the straight path to it must not go deeper
   // into a body than the particle is now (less half a radius), nor into a static body at
   // all: fluid leaves a closed or too thin gap sideways, never through a wall or a body.
-  const double rf = boundaries.fluidRadius();
+  const double sc = boundaries.contactDistance();
   const Boundaries::Clearance start = boundaries.clearance(x, at);
   const double now = start.all;
-  const double depth_limit = std::min(now, 0.0) - 0.5 * rf;
-  const double static_limit = std::min(start.walls, 0.0) - 0.5 * rf;
-  const double step = 0.5 * rf;
+  const double depth_limit = std::min(now, 0.0) - 0.5 * sc;
+  const double static_limit = std::min(start.walls, 0.0) - 0.5 * sc;
+  const double step = 0.5 * boundaries.fluidRadius();
   const int rings = 32;   // 16 r_f = 8 spacings
   double progress = now;  // most clearance reached on an open path (if none has room)
   Vec3 farthest = x;
@@ -80,8 +80,8 @@ bool escape(const Boundaries& boundaries, const BodyPlacement& at, Vec3& x) {
       // out once lifted out of the wall. Not a point inside a body: lifted, the particles
       // inside a body moved onto them would all land on its nearest face.
       Vec3 lifted = y;
-      const bool lifts = there.all < rf / 16.0 && there.all >= there.walls &&
-                         projectOut(boundaries, at, lifted, 0.5 * rf, 3);
+      const bool lifts = there.all < sc / 16.0 && there.all >= there.walls &&
+                         projectOut(boundaries, at, lifted, 0.5 * sc, 3);
       const double c = lifts ? boundaries.clearance(lifted, at).all : there.all;
       if (c <= now) continue;
       bool open = true;
@@ -91,15 +91,15 @@ bool escape(const Boundaries& boundaries, const BodyPlacement& at, Vec3& x) {
       }
       if (!open) continue;
       if (c > progress) progress = c, farthest = lifts ? lifted : y;
-      if (c < rf / 16.0 || c <= best) continue;
+      if (c < sc / 16.0 || c <= best) continue;
       Vec3 room = lifts ? lifted : y;  // half a radius from every body there?
-      if (!lifts && !projectOut(boundaries, at, room, 0.5 * rf, 3)) continue;
+      if (!lifts && !projectOut(boundaries, at, room, 0.5 * sc, 3)) continue;
       best = c;
       chosen = room;
     }
     if (best > -std::numeric_limits<double>::infinity()) {
       Vec3 full = chosen;
-      x = projectOut(boundaries, at, full, rf, 4) ? full : chosen;
+      x = projectOut(boundaries, at, full, sc, 4) ? full : chosen;
       return true;
     }
   }
@@ -112,23 +112,23 @@ std::size_t correctPositions(const Boundaries& boundaries, const BodyPlacement& 
                              std::vector<Vec3>* v) {
   if (boundaries.bodyCount() == 0) return 0;
   const std::int64_t n = static_cast<std::int64_t>(x.size());
-  const double rf = boundaries.fluidRadius();
+  const double sc = boundaries.contactDistance();
   std::size_t stuck = 0;
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : stuck)
   for (std::int64_t i = 0; i < n; ++i) {
     if (!candidates[i] && !Boundaries::nearMovingBody(x[i], at)) continue;
-    // Full clearance r_f from every body (the usual case: one pass, or a few in corners).
+    // Full clearance s_c from every body (the usual case: one pass, or a few in corners).
     Vec3 xi = x[i];
     Vec3 vi = v ? (*v)[i] : Vec3::Zero();
-    if (projectOut(boundaries, at, xi, rf, 4, v ? &vi : nullptr)) {
+    if (projectOut(boundaries, at, xi, sc, 4, v ? &vi : nullptr)) {
       x[i] = xi;
       if (v) (*v)[i] = vi;
       continue;
     }
     // Squeezed: bodies closer than a diameter. The largest clearance they all allow
-    // (r_f / 2 ... r_f / 16), between them at a raised density.
+    // (s_c / 2 ... s_c / 16), between them at a raised density.
     bool placed = false;
-    for (double s = 0.5 * rf; s >= rf / 16.0 && !placed; s *= 0.5) {
+    for (double s = 0.5 * sc; s >= sc / 16.0 && !placed; s *= 0.5) {
       xi = x[i];
       placed = projectOut(boundaries, at, xi, s, 4);
     }

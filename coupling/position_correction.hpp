@@ -1,7 +1,8 @@
-// Direct forcing's position correction (DESIGN.md §4, eq. 19-20, Becker et al. 2009):
-// after the step's integration, no fluid centre may lie closer than its radius to a body's
-// exact surface. With the velocity control (coupling/direct_forcing.hpp) it is the second
-// half of the method; the boundaries (coupling/boundary.hpp) answer where the surfaces are.
+// Direct forcing's position correction (eq. 19-20, Becker et al. 2009): after the step's
+// integration, no fluid centre may lie closer than the contact distance s_c
+// (Boundaries::contactDistance, half the fluid radius) to a body's exact surface. With the velocity
+// control (coupling/direct_forcing.hpp) it is the second half of the method; the boundaries
+// (coupling/boundary.hpp) answer where the surfaces are.
 #pragma once
 
 #include "coupling/boundary.hpp"
@@ -12,15 +13,15 @@
 namespace wake {
 
 /// Position correction (eq. 19-20), for every body at once: moves each fluid centre to
-/// the nearest point at least its radius r_f from every body's exact surface (Gauss-Seidel
+/// the nearest point at least s_c from every body's exact surface (Gauss-Seidel
 /// projections on the bodies' tangent planes, contacts found again after each pass, so
 /// corners and several bodies are handled together). A particle squeezed between bodies
-/// closer than its diameter cannot have r_f from all of them: it is treated as one chain
+/// closer than 2 s_c cannot have s_c from all of them: it is treated as one chain
 /// with all its boundaries and placed where the clearance is largest that all of them
-/// allow (r_f / 2, r_f / 4, ... r_f / 16), between them at a raised density, never pushed
+/// allow (s_c / 2, s_c / 4, ... s_c / 16), between them at a raised density, never pushed
 /// out of one body into another or through a wall. Where the bodies touch (a gap closed,
 /// a body moved onto fluid by user code) there is no room between them: the particle
-/// moves to the nearest point with r_f / 2 from every body, found by a search over 26
+/// moves to the nearest point with s_c / 2 from every body, found by a search over 26
 /// directions out to eight spacings along paths that neither cross a static body nor go
 /// deeper into any body: squeezed fluid goes sideways, out of the gap, never through a
 /// wall.
@@ -44,7 +45,7 @@ std::size_t correctPositions(const Boundaries& boundaries, const BodyPlacement& 
 bool projectOut(const Boundaries& boundaries, const BodyPlacement& at, Vec3& y, double s,
                 int passes, Vec3* velocity = nullptr);
 
-/// Moves x to the nearest point where it can have r_f / 2 from every body, reachable
+/// Moves x to the nearest point where it can have s_c / 2 from every body, reachable
 /// without crossing a body (see correctPositions). False when there is none within eight
 /// spacings: then x moves to the point of most clearance found, if more than it has now.
 bool escape(const Boundaries& boundaries, const BodyPlacement& at, Vec3& x);

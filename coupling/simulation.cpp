@@ -198,7 +198,8 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
   fluid_->setNeighborSkin(
       s.neighbor_skin >= 0 ? s.neighbor_skin : SolverSettings::kAutoSkin * s.fluid.supportRadius());
   if (s.solver == FluidSolver::Dfsph) dfsph_ = std::make_unique<DivergenceFreeSolver>(s.dfsph);
-  boundaries_ = std::make_unique<Boundaries>(s.fluid, s.domain);
+  boundaries_ = std::make_unique<Boundaries>(
+      s.fluid, s.domain, dfsph_ ? Boundaries::kDfsphContactFraction : Boundaries::kContactFraction);
   for (const BodySettings& b : s.bodies)
     boundaries_->addBody(b);
   boundaries_->finalize();
@@ -413,6 +414,9 @@ void Simulation::computeFluidForces() {
   std::vector<Vec3>& wall_accelerations = st.acceleration;
   boundaries_->addWallTerms(*fluid_, work_.placed, st.density, wall_accelerations,
                             work_.wall_reaction, work_.wall_pairs);
+  work_.parts.assign(boundaries_->bodyCount(), WrenchParts{});
+  for (std::size_t b = 0; b < work_.parts.size(); ++b)
+    work_.parts[b].shear = work_.wall_reaction[b];
   timings_.boundary += secondsSince(t0);
   const double compression = averageCompression(st.density, model_.fluid.rest_density);
   data_.run.density_error_sum += compression;
@@ -455,7 +459,8 @@ void Simulation::computeFluidForces() {
     boundaries_->computeSamplePressure(*fluid_, work_.placed, model_.gravity, work_.wall_pairs,
                                        work_.sample_pressure);
     boundaries_->addWallPressure(*fluid_, work_.placed, work_.wall_pairs, work_.sample_pressure,
-                                 wall_accelerations, work_.wall_reaction);
+                                 wall_accelerations);
+    boundaries_->addBodyPressure(work_.placed, work_.sample_pressure, work_.wall_reaction);
     timings_.boundary += secondsSince(t0);
   }
 
@@ -505,6 +510,17 @@ void Simulation::predict(double dt) {
   }
   t0 = Clock::now();
   rigid_->predict(dt, work_.body_pred);
+  // The walls' pressure and shear on each two-way body are known before the control: the
+  // body is predicted with them, so the control sees only what they leave to it.
+  for (std::size_t b = 0; b < work_.body_pred.size(); ++b) {
+    RigidPrediction& p = work_.body_pred[b];
+    if (!boundaries_->body(b).twoWay() || !(p.inverse_mass > 0.0)) continue;
+    const Vec3 dv = (dt * p.inverse_mass) * work_.wall_reaction[b].force;
+    const Vec3 dw = dt * (p.inverse_inertia_world * work_.wall_reaction[b].torque);
+    p.state.linear_velocity += dv;
+    p.state.angular_velocity += dw;
+    p.state.pose = integratePose(p.state.pose, dv, dw, dt);
+  }
   timings_.rigid += secondsSince(t0);
 }
 
@@ -536,6 +552,10 @@ void Simulation::stepBodies(double dt) {
   const auto t0 = Clock::now();
   const std::size_t nb = boundaries_->bodyCount();
   for (std::size_t b = 0; b < nb; ++b) {
+    WrenchParts& part = work_.parts[b];
+    part.control = data_.wrenches[b];
+    part.pressure.force = work_.wall_reaction[b].force - part.shear.force;
+    part.pressure.torque = work_.wall_reaction[b].torque - part.shear.torque;
     data_.wrenches[b].force += work_.wall_reaction[b].force;
     data_.wrenches[b].torque += work_.wall_reaction[b].torque;
   }

@@ -168,6 +168,16 @@ struct SimulationState : RunData {
   std::vector<std::uint32_t> neighbor_reference_id;
 };
 
+/// The fluid's wrench on one body in one step, by the term it comes from (each zero for
+/// one-way bodies). Their sum is the body's whole wrench (Simulation::lastWrenches).
+struct WrenchParts {
+  /// The walls' pressure force: the samples' pressure in the fluid's pressure term (WCSPH)
+  /// or the divergence-free solves' pressure impulse on the body (DFSPH).
+  Wrench pressure;
+  Wrench shear;    ///< the walls' viscous shear (no-slip and partial-slip walls)
+  Wrench control;  ///< direct forcing's velocity control (or the penalty force)
+};
+
 /// Wall-clock seconds spent in each part of the step, summed over steps.
 /// `boundary` is all boundary-particle work: the density share plus `control` (contacts
 /// and velocity control) plus `correction` (position correction). `rigid` is the rigid
@@ -226,6 +236,9 @@ class Simulation {
   const RigidBodies& rigidBodies() const { return *rigid_; }
   /// The fluid's wrench on each body in the last step (zero for one-way bodies).
   const std::vector<Wrench>& lastWrenches() const { return data_.wrenches; }
+  /// The same wrenches split by where they come from (WrenchParts; their sum is
+  /// lastWrenches()).
+  const std::vector<WrenchParts>& lastWrenchParts() const { return work_.parts; }
   /// Particle-body contacts found in the last step.
   std::size_t lastContacts() const { return data_.run.last_contacts; }
   /// (n) 1 where a fluid particle (in the current order) was in contact in the last step
@@ -329,6 +342,7 @@ class Simulation {
     std::vector<RigidState> body_now, body_final;  // (bodies) states at t and t + dt
     std::vector<RigidPrediction> body_pred;        // (bodies) predicted states
     std::vector<Wrench> wall_reaction;             // (bodies) its reaction on two-way bodies
+    std::vector<WrenchParts> parts;                // (bodies) the last step's wrenches by term
     SamplePressure sample_pressure;                // the boundary samples' pressure
     WallPairs wall_pairs;                          // the step's (particle, sample) pairs
     std::vector<RigidPrediction> body_mass;        // Dfsph: the bodies' masses now (a zero step)

@@ -166,9 +166,12 @@ TEST(Correction, WithVelocitiesAMovedParticleStopsMovingIntoTheWallsItWasMovedFr
   // radius to both walls, moving into them and along the edge, ends r from both, moving
   // only along the edge; one moving away from the wall it was moved from keeps its speed;
   // one clear of the walls keeps position and velocity. Without velocities (WCSPH's
-  // correction) nothing but the positions changes.
-  auto b = std::make_unique<Boundaries>(fluidParams(),
-                                        Aabb{Vec3(-0.1, -0.1, -0.1), Vec3(0.2, 0.2, 0.2)});
+  // correction) nothing but the positions changes. The walls as the divergence-free solver
+  // has them (its contact distance: the full radius).
+  auto b =
+      std::make_unique<Boundaries>(fluidParams(), Aabb{Vec3(-0.1, -0.1, -0.1), Vec3(0.2, 0.2, 0.2)},
+                                   Boundaries::kDfsphContactFraction);
+  ASSERT_EQ(b->contactDistance(), kR);
   b->addBody(staticBody("tank", makeTank(Vec3::Zero(), Vec3(0.1, 0.1, 0.1), 4 * kR)));
   b->finalize();
   const BodyPlacement at = b->placeAtStart();

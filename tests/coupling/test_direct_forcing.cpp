@@ -5,8 +5,10 @@
 #include "coupling/test_support.hpp"
 
 #include <gtest/gtest.h>
+
 #include <omp.h>
 #include <Eigen/Eigenvalues>
+#include <cstdio>
 
 #include <random>
 
@@ -101,21 +103,35 @@ TEST(GlobalApproach, RandomContactsAllEndOnTargetWithMomentumBalanced) {
 }
 
 TEST(TwoWay, FluidPlusBodyMomentumIsConservedBothMethods) {
-  for (CouplingMethod method : {CouplingMethod::Local, CouplingMethod::Global}) {
-    Simulation sim = sheetOnFreeBox(method, 0.0);
-    const Vec3 p0 = totalMomentum(sim, 0.5);
-    std::size_t max_contacts = 0;
-    while (sim.time() < 0.04) {
-      sim.step(0.04);
-      max_contacts = std::max(max_contacts, sim.lastContacts());
-      ASSERT_EQ(sim.countPenetrating(), 0u);
+  // A sheet of fluid hits a free box without gravity. The control's impulses and the
+  // divergence-free solve's pressure impulses each act on fluid and box as a pair: the sum
+  // of their momenta does not change. With the weakly compressible fluid the box's pressure
+  // force is the surface integral of the samples' pressure (Boundaries::addBodyPressure)
+  // while the fluid keeps the pair terms that hold it at the wall: the two differ by the
+  // walls' discretisation error, measured 3.2 % of the sheet's momentum here (r = 1 cm, a
+  // plate one spacing thick), and that is all the momentum made or lost.
+  for (const FluidSolver solver : {FluidSolver::Wcsph, FluidSolver::Dfsph}) {
+    for (CouplingMethod method : {CouplingMethod::Local, CouplingMethod::Global}) {
+      Simulation sim = sheetOnFreeBox(method, 0.0, 0, solver);
+      const Vec3 p0 = totalMomentum(sim, 0.5);
+      std::size_t max_contacts = 0;
+      while (sim.time() < 0.04) {
+        sim.step(0.04);
+        max_contacts = std::max(max_contacts, sim.lastContacts());
+        ASSERT_EQ(sim.countPenetrating(), 0u);
+      }
+      EXPECT_GE(max_contacts, 5u);
+      const Vec3 p1 = totalMomentum(sim, 0.5);
+      // The box took the sheet's downward momentum.
+      EXPECT_LT(sim.bodyStates()[0].linear_velocity.y(), -0.1);
+      const double tolerance = solver == FluidSolver::Dfsph ? 1e-9 : 0.05;
+      std::printf("[ momentum ] %s %s: |p1 - p0| / |p0| = %.3g\n",
+                  solver == FluidSolver::Dfsph ? "dfsph" : "wcsph",
+                  method == CouplingMethod::Global ? "global" : "local",
+                  (p1 - p0).norm() / p0.norm());
+      EXPECT_LT((p1 - p0).norm(), tolerance * p0.norm())
+          << "p0 " << p0.transpose() << " p1 " << p1.transpose();
     }
-    EXPECT_GE(max_contacts, 5u);
-    const Vec3 p1 = totalMomentum(sim, 0.5);
-    // The box took the sheet's downward momentum.
-    EXPECT_LT(sim.bodyStates()[0].linear_velocity.y(), -0.1);
-    EXPECT_LT((p1 - p0).norm(), 1e-9 * p0.norm())
-        << "p0 " << p0.transpose() << " p1 " << p1.transpose();
   }
 }
 

@@ -226,7 +226,8 @@ struct WallPassScene {
     fluid.computePressure();
     walls.computeSamplePressure(fluid, at, Vec3(0, -9.81, 0), pairs, r.samples);
     r.pressure_reaction.assign(walls.bodyCount(), Wrench{});
-    walls.addWallPressure(fluid, at, pairs, r.samples, r.pressure_force, r.pressure_reaction);
+    walls.addWallPressure(fluid, at, pairs, r.samples, r.pressure_force);
+    walls.addBodyPressure(at, r.samples, r.pressure_reaction);
     return r;
   }
 };
