@@ -584,7 +584,10 @@ double Boundaries::surfaceForce(const FluidState& st, const SampleSet& set, std:
                                 const Vec3& xk, const Vec3& normal, const Vec3& gravity,
                                 const std::uint32_t* particle, std::size_t count) const {
   // The sample's pressure as computeSamplePressure's, from the fluid in front of its face
-  // only: a thin wall's sample has the fluid of the other side within its support too.
+  // only: a thin wall's sample has the fluid of the other side within its support too. The
+  // sample lies r_b below the surface, so the fluid on its side is at d.n > r_b on a flat
+  // face and a little less beside a convex one; what lies more than r_b behind it is the
+  // other side's.
   const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
   double w_sum = 0.0, p_sum = 0.0;
   Vec3 rise = Vec3::Zero();
@@ -592,7 +595,7 @@ double Boundaries::surfaceForce(const FluidState& st, const SampleSet& set, std:
     const std::uint32_t a = particle[t];
     const Vec3 d = st.position[a] - xk;
     const double d_sq = d.squaredNorm();
-    if (d_sq >= support_sq || !(d.dot(normal) > 0.0)) continue;
+    if (d_sq >= support_sq || !(d.dot(normal) > -radius_)) continue;
     const double w = kernel_.value(std::sqrt(d_sq));
     w_sum += w;
     p_sum += st.pressure[a] * w;

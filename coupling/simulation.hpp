@@ -171,8 +171,9 @@ struct SimulationState : RunData {
 /// The fluid's wrench on one body in one step, by the term it comes from (each zero for
 /// one-way bodies). Their sum is the body's whole wrench (Simulation::lastWrenches).
 struct WrenchParts {
-  /// The walls' pressure force: the samples' pressure in the fluid's pressure term (WCSPH)
-  /// or the divergence-free solves' pressure impulse on the body (DFSPH).
+  /// The walls' pressure force: with WCSPH the surface integral of the samples' pressure
+  /// (Boundaries::addBodyPressure), with DFSPH the divergence-free solves' pressure impulse
+  /// on the body.
   Wrench pressure;
   Wrench shear;    ///< the walls' viscous shear (no-slip and partial-slip walls)
   Wrench control;  ///< direct forcing's velocity control (or the penalty force)
