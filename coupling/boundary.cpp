@@ -1,7 +1,6 @@
 #include "coupling/boundary.hpp"
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 
 #include <omp.h>
 
@@ -218,9 +217,9 @@ void Boundaries::balanceAreas(SurfaceSamples& samples) {
     imbalance += samples.area[k] * samples.normal[k];
     normals += samples.normal[k] * samples.normal[k].transpose();
   }
-  const Eigen::SelfAdjointEigenSolver<Mat3> eigen(normals);
-  if (!(eigen.eigenvalues().minCoeff() > 1e-9 * eigen.eigenvalues().maxCoeff())) return;
-  const Vec3 lambda = normals.ldlt().solve(imbalance);
+  const Eigen::LDLT<Mat3> ldlt(normals);
+  if (!(ldlt.rcond() > 1e-9)) return;  // normals in a plane or a line: nothing to balance
+  const Vec3 lambda = ldlt.solve(imbalance);
   for (std::size_t k = 0; k < samples.size(); ++k)
     samples.area[k] = std::max(0.0, samples.area[k] - lambda.dot(samples.normal[k]));
 }

@@ -245,13 +245,12 @@ class Boundaries {
   /// near). A pressure acts along the surface's normals, so a body at rest in fluid at rest
   /// feels the integral of the fluid's pressure over its wetted surface (Archimedes) however
   /// the particles beside it are arranged. The reaction of addWallPressure's pair terms
-  /// depends on that arrangement: a sphere five spacings across held at rest felt 0.92 of
-  /// its buoyancy, and 0.06 of it more sinking at 5 mm/s than rising (0.01 is its drag), a
-  /// hysteresis that held bodies a little denser than the fluid up. The fluid keeps the pair
-  /// terms (they hold it at the wall), so fluid and body exchange momentum to within the
-  /// difference of the two, a discretisation error that the spacing shrinks. The closed
-  /// surface's areas are balanced at finalize() so that a uniform pressure pushes it
-  /// nowhere (sum_k A_k n_k = 0).
+  /// depends on that arrangement: a sphere five spacings across held at rest felt 0.88-0.93
+  /// of its buoyancy from it, 0.958 from the surface integral (docs/forces.md). The fluid
+  /// keeps the pair terms (they hold it at the wall), so fluid and body exchange momentum
+  /// to within the difference of the two, a discretisation error that the spacing shrinks. The
+  /// closed surface's areas are balanced at finalize() so that a uniform pressure pushes it nowhere
+  /// (sum_k A_k n_k = 0).
   void addBodyPressure(const BodyPlacement& at, const SamplePressure& pressure,
                        std::vector<Wrench>& reaction) const;
 
@@ -489,11 +488,6 @@ class Boundaries {
   }
   /// The sample lists of `pairs` (sample -> particles) from its particle lists.
   void transposePairs(WallPairs& pairs) const;
-  /// Sample k's surface element force P^s_k A_k (addBodyPressure) from its `count` particles
-  /// `particle` (x_k, normal: world).
-  double surfaceForce(const FluidState& st, const SampleSet& set, std::size_t k, const Vec3& xk,
-                      const Vec3& normal, const Vec3& gravity, const std::uint32_t* particle,
-                      std::size_t count) const;
   /// Each sample's P_k / rho_k^2 (computeSamplePressure) and, for a two-way body's set,
   /// its surface element force (SamplePressure).
   void samplePressure(const Fluid& fluid, const SampleSet& set, const Mat3& rotation,

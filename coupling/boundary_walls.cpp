@@ -580,34 +580,6 @@ void Boundaries::computeSamplePressure(const Fluid& fluid, const BodyPlacement& 
   }
 }
 
-double Boundaries::surfaceForce(const FluidState& st, const SampleSet& set, std::size_t k,
-                                const Vec3& xk, const Vec3& normal, const Vec3& gravity,
-                                const std::uint32_t* particle, std::size_t count) const {
-  // The sample's pressure as computeSamplePressure's, from the fluid in front of its face
-  // only: a thin wall's sample has the fluid of the other side within its support too. The
-  // sample lies r_b below the surface, so the fluid on its side is at d.n > r_b on a flat
-  // face and a little less beside a convex one; what lies more than r_b behind it is the
-  // other side's.
-  const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
-  double w_sum = 0.0, p_sum = 0.0;
-  Vec3 rise = Vec3::Zero();
-  for (std::size_t t = 0; t < count; ++t) {
-    const std::uint32_t a = particle[t];
-    const Vec3 d = st.position[a] - xk;
-    const double d_sq = d.squaredNorm();
-    if (d_sq >= support_sq || !(d.dot(normal) > -radius_)) continue;
-    const double w = kernel_.value(std::sqrt(d_sq));
-    w_sum += w;
-    p_sum += st.pressure[a] * w;
-    rise -= (st.density[a] * w) * d;
-  }
-  if (!(w_sum > 0.0)) return 0.0;
-  // Carried from the sample, r_b below the surface, up to the surface point.
-  const double p =
-      (p_sum + gravity.dot(rise)) / w_sum + fluid_.rest_density * radius_ * gravity.dot(normal);
-  return std::max(0.0, p) * set.area[k];
-}
-
 void Boundaries::samplePressure(const Fluid& fluid, const SampleSet& set, const Mat3& rotation,
                                 const Vec3& origin, const Vec3& gravity, bool two_way,
                                 const std::vector<std::uint32_t>& offset,
@@ -624,22 +596,40 @@ void Boundaries::samplePressure(const Fluid& fluid, const SampleSet& set, const 
 #if defined(WAKE_HAS_LANES4)
   if (wide_lanes_) terms = sampleTerms4;
 #endif
-#pragma omp parallel for schedule(static)
-  for (std::int64_t k = 0; k < count; ++k) {
-    if (offset[k] == offset[k + 1]) continue;  // no fluid near: no pressure
-    const Vec3 xk = rotation * set.position[k] + origin;
-    // sum_a W_ka, sum_a P_a W_ka and sum_a rho_a (x_k - x_a) W_ka
-    const SampleSums sums =
-        terms(st, kernel_, support_sq, xk, particle.data() + offset[k], offset[k + 1] - offset[k]);
-    const double w_sum = sums.w;
-    if (w_sum == 0.0) continue;
-    const double p = std::max(0.0, (sums.p + gravity.dot(sums.rise)) / w_sum);
-    if (p == 0.0) continue;
-    const double rho = fluid_.densityAt(p);
-    p_rho2[k] = p / (rho * rho);
-    if (two_way)
-      force[k] = surfaceForce(st, set, k, xk, rotation * set.normal[k], gravity,
-                              particle.data() + offset[k], offset[k + 1] - offset[k]);
+#pragma omp parallel
+  {
+    std::vector<std::uint32_t> front;  // a two-way sample's particles in front of its face
+#pragma omp for schedule(static)
+    for (std::int64_t k = 0; k < count; ++k) {
+      if (offset[k] == offset[k + 1]) continue;  // no fluid near: no pressure
+      const Vec3 xk = rotation * set.position[k] + origin;
+      const std::uint32_t* near = particle.data() + offset[k];
+      const std::size_t near_count = offset[k + 1] - offset[k];
+      // sum_a W_ka, sum_a P_a W_ka and sum_a rho_a (x_k - x_a) W_ka
+      const SampleSums sums = terms(st, kernel_, support_sq, xk, near, near_count);
+      const double w_sum = sums.w;
+      if (w_sum == 0.0) continue;
+      const double p = std::max(0.0, (sums.p + gravity.dot(sums.rise)) / w_sum);
+      if (p == 0.0) continue;
+      const double rho = fluid_.densityAt(p);
+      p_rho2[k] = p / (rho * rho);
+      if (!two_way) continue;
+      // The surface element force P^s_k A_k (addBodyPressure): the same estimate from the
+      // fluid in front of the face only, as a thin wall's sample has the fluid of the other
+      // side within its support too. The sample lies r_b below the surface, so the fluid on
+      // its side is at d.n > r_b on a flat face and a little less beside a convex one; what
+      // lies more than r_b behind it is the other side's. Then carried from the sample up
+      // to the surface point.
+      const Vec3 normal = rotation * set.normal[k];
+      front.clear();
+      for (std::size_t t = 0; t < near_count; ++t)
+        if ((st.position[near[t]] - xk).dot(normal) > -radius_) front.push_back(near[t]);
+      const SampleSums face = terms(st, kernel_, support_sq, xk, front.data(), front.size());
+      if (!(face.w > 0.0)) continue;
+      const double ps = (face.p + gravity.dot(face.rise)) / face.w +
+                        fluid_.rest_density * radius_ * gravity.dot(normal);
+      force[k] = std::max(0.0, ps) * set.area[k];
+    }
   }
 }
 
