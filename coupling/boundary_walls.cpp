@@ -620,11 +620,14 @@ void Boundaries::samplePressure(const Fluid& fluid, const SampleSet& set, const 
       // its side is at d.n > r_b on a flat face and a little less beside a convex one; what
       // lies more than r_b behind it is the other side's. Then carried from the sample up
       // to the surface point.
+      // Where every particle is in front (all but thin walls), those are the sums above.
       const Vec3 normal = rotation * set.normal[k];
       front.clear();
       for (std::size_t t = 0; t < near_count; ++t)
         if ((st.position[near[t]] - xk).dot(normal) > -radius_) front.push_back(near[t]);
-      const SampleSums face = terms(st, kernel_, support_sq, xk, front.data(), front.size());
+      const SampleSums face = front.size() == near_count
+                                  ? sums
+                                  : terms(st, kernel_, support_sq, xk, front.data(), front.size());
       if (!(face.w > 0.0)) continue;
       const double ps = (face.p + gravity.dot(face.rise)) / face.w +
                         fluid_.rest_density * radius_ * gravity.dot(normal);
