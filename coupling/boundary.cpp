@@ -547,4 +547,102 @@ double Boundaries::signedDistance(const Vec3& x, const BodyPlacement& at) const 
   return best;
 }
 
+void Boundaries::addContactPressure(const BodyPlacement& at, const Vec3& gravity,
+                                    SamplePressure& pressure) const {
+  const double reach = radius_ + radius_;  // the gap no particle crosses: 2 r
+  const double rho0 = fluid_.rest_density;
+  std::vector<std::uint32_t> contact, level, next;
+  std::vector<std::uint8_t> state;  // 0 neither, 1 known, 2 contact (unknown), 3 reached
+  std::vector<double> value;        // P^s (Pa) of the known and the reached
+  for (std::size_t m = 0; m < moving_.size(); ++m) {
+    const MovingBody& mb = moving_[m];
+    if (!bodies_[mb.body].settings.twoWay()) continue;
+    const SampleSet& set = mb.samples;
+    std::vector<double>& force = pressure.surface_force[m + 1];
+    const std::vector<std::uint8_t>& wet = pressure.wet[m + 1];
+    const std::size_t n = set.position.size();
+    if (force.size() != n || wet.size() != n)
+      throw std::logic_error("Boundaries::addContactPressure before computeSamplePressure");
+    const BodyFrame& frame = at[mb.body];
+    // The dry samples whose surface point another body's surface is within reach of.
+    contact.clear();
+    std::size_t known = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (wet[k]) {
+        ++known;
+        continue;
+      }
+      const Vec3 s =
+          frame.rotation * (set.position[k] + radius_ * set.normal[k]) + frame.pose.position;
+      bool touching = false;
+      forEachBodyDistance(s, at, [&](std::uint32_t body, bool, double d) {
+        if (body != mb.body && d < reach) touching = true;
+      });
+      if (touching) contact.push_back(static_cast<std::uint32_t>(k));
+    }
+    if (contact.empty() || known == 0) continue;
+    state.assign(n, 0);
+    value.assign(n, 0.0);
+    for (std::size_t k = 0; k < n; ++k)
+      if (wet[k]) {
+        state[k] = 1;
+        value[k] = force[k] / set.area[k];
+      }
+    for (const std::uint32_t k : contact)
+      state[k] = 2;
+    // Gravity in the body's frame: the hydrostatic step from one surface point to another.
+    const Vec3 g = frame.rotation.transpose() * gravity;
+    auto surface = [&](std::uint32_t k) { return Vec3(set.position[k] + radius_ * set.normal[k]); };
+    // A sample's neighbours on the surface: within 1.5 sample spacings (2 r), so that a
+    // face's square lattice links its diagonals too.
+    const double link = 1.5 * reach, link_sq = link * link;
+    auto forEachLinked = [&](std::uint32_t k, auto&& f) {
+      const Vec3& p = set.position[k];
+      set.grid.forEachRangeInSphere(p, set.density_reach, link, false,
+                                    [&](std::uint32_t lo, std::uint32_t hi) {
+                                      for (std::uint32_t j = lo; j < hi; ++j)
+                                        if (j != k && (p - set.position[j]).squaredNorm() < link_sq)
+                                          f(j);
+                                    });
+    };
+    // Level by level from the wetted rim: each level reads only the levels before it, in
+    // the samples' order (the same bits on any number of threads).
+    level.clear();
+    for (const std::uint32_t k : contact) {
+      bool rim = false;
+      forEachLinked(k, [&](std::uint32_t j) {
+        if (state[j] == 1) rim = true;
+      });
+      if (rim) level.push_back(k);
+    }
+    while (!level.empty()) {
+      for (const std::uint32_t k : level) {
+        double sum = 0.0;
+        int count = 0;
+        const Vec3 sk = surface(k);
+        forEachLinked(k, [&](std::uint32_t j) {
+          if (state[j] != 1 && state[j] != 3) return;
+          sum += value[j] + rho0 * g.dot(sk - surface(j));
+          ++count;
+        });
+        value[k] = count > 0 ? sum / count : 0.0;
+      }
+      for (const std::uint32_t k : level)
+        state[k] = 3;
+      next.clear();
+      for (const std::uint32_t k : level)
+        forEachLinked(k, [&](std::uint32_t j) {
+          if (state[j] == 2) {
+            state[j] = 4;  // queued
+            next.push_back(j);
+          }
+        });
+      std::sort(next.begin(), next.end());
+      level.swap(next);
+    }
+    for (const std::uint32_t k : contact)
+      if (state[k] == 3) force[k] = std::max(0.0, value[k]) * set.area[k];
+  }
+}
+
 }  // namespace wake

@@ -105,6 +105,9 @@ struct SamplePressure {
   /// Two-way bodies' sets only (empty for the others): each sample's surface element force
   /// P^s_k A_k (N, >= 0; addBodyPressure).
   std::vector<std::vector<double>> surface_force;
+  /// Two-way bodies' sets only: 1 where fluid lies in front of the sample's face (its
+  /// surface_force is the fluid's), 0 where none does (dry: addContactPressure).
+  std::vector<std::vector<std::uint8_t>> wet;
 };
 
 /// The (fluid particle, sample) pairs within the kernel support of one step: found once by
@@ -226,9 +229,12 @@ class Boundaries {
   /// fluid's own pressure: a tank of fluid at rest stays at rest. rho_k = the fluid's
   /// equation of state inverted at P_k. Call after the fluid's pressure is known (this
   /// step's densities with the walls' share) and before addWallPressure; written to `out`.
-  /// `pairs`: this step's, from addWallTerms.
+  /// `pairs`: this step's, from addWallTerms. `two_way_only`: the two-way bodies' sets
+  /// alone (the others left empty), from the pressure's running mean where the fluid keeps
+  /// one: what addContactPressure needs under the divergence-free solver.
   void computeSamplePressure(const Fluid& fluid, const BodyPlacement& at, const Vec3& gravity,
-                             WallPairs& pairs, SamplePressure& out) const;
+                             WallPairs& pairs, SamplePressure& out,
+                             bool two_way_only = false) const;
 
   /// The walls' pressure force on the fluid, once the samples' pressure is known: the
   /// samples are neighbours in the fluid's symmetric pressure term,
@@ -251,8 +257,23 @@ class Boundaries {
   /// to within the difference of the two, a discretisation error that the spacing shrinks. The
   /// closed surface's areas are balanced at finalize() so that a uniform pressure pushes it nowhere
   /// (sum_k A_k n_k = 0).
+  /// With `dry_only`, only the dry samples' (addContactPressure's: the divergence-free
+  /// solver moves the bodies with its own pressure where fluid is near).
   void addBodyPressure(const BodyPlacement& at, const SamplePressure& pressure,
-                       std::vector<Wrench>& reaction) const;
+                       std::vector<Wrench>& reaction, bool dry_only = false) const;
+  /// The pressure on a two-way body's contact faces, into `pressure.surface_force` before
+  /// addBodyPressure: where the body touches another body or a wall, no particle fits
+  /// between the two faces, yet real water reaches any real gap. A dry sample (no fluid in
+  /// front of its face) whose surface point lies within 2 r of another body's exact
+  /// surface is a contact sample; each gets the pressure of the wetted samples next to it
+  /// carried hydrostatically, P_k = mean_j (P^s_j + rho0 g . (s_k - s_j)) (s the surface
+  /// points, j its neighbours within 2 r already known), level by level inwards from the
+  /// contact's wetted rim, clamped at 0 (above the water) and 0 where no wetted sample
+  /// leads to it (a contact out of the water). Without it a light body resting on a heavy
+  /// one or on the floor under water is held down like a suction cup: the water's full
+  /// load on its top and nothing under it.
+  void addContactPressure(const BodyPlacement& at, const Vec3& gravity,
+                          SamplePressure& pressure) const;
 
   /// The walls' and bodies' terms of the divergence-free solver (sph/dfsph.hpp), from this
   /// step's pairs (addWallTerms) with the bodies at `at`, into `out` (SolverBoundary):
@@ -312,6 +333,11 @@ class Boundaries {
     return at.moving_reach.contains(x);
   }
   bool hasMovingBodies() const { return !moving_.empty(); }
+  bool hasTwoWayBodies() const {
+    for (const MovingBody& m : moving_)
+      if (bodies_[m.body].settings.twoWay()) return true;
+    return false;
+  }
 
   /// How far x is from the bodies' exact surfaces, capped at the fluid radius r_f:
   /// min(r_f, signed distance of x to the nearest surface within contact reach), over
@@ -490,11 +516,11 @@ class Boundaries {
   void transposePairs(WallPairs& pairs) const;
   /// Each sample's P_k / rho_k^2 (computeSamplePressure) and, for a two-way body's set,
   /// its surface element force (SamplePressure).
-  void samplePressure(const Fluid& fluid, const SampleSet& set, const Mat3& rotation,
-                      const Vec3& origin, const Vec3& gravity, bool two_way,
+  void samplePressure(const Fluid& fluid, const std::vector<double>& pressure, const SampleSet& set,
+                      const Mat3& rotation, const Vec3& origin, const Vec3& gravity, bool two_way,
                       const std::vector<std::uint32_t>& offset,
                       const std::vector<std::uint32_t>& particle, std::vector<double>& p_rho2,
-                      std::vector<double>& force) const;
+                      std::vector<double>& force, std::vector<std::uint8_t>& wet) const;
 
   FluidParams fluid_;
   CubicSplineKernel kernel_;

@@ -185,9 +185,9 @@ struct SampleSums {
   Vec3 rise = Vec3::Zero();
 };
 template <class L>
-inline SampleSums sampleTerms(const FluidState& st, const CubicSplineKernel& kernel,
-                              double support_sq, const Vec3& xk, const std::uint32_t* particle,
-                              std::size_t count) {
+inline SampleSums sampleTerms(const FluidState& st, const double* pressure,
+                              const CubicSplineKernel& kernel, double support_sq, const Vec3& xk,
+                              const std::uint32_t* particle, std::size_t count) {
   double w_sum = 0.0, p_sum = 0.0, rx = 0.0, ry = 0.0, rz = 0.0;
   forEachNeighborGroup<L>(particle, 0, count, [&](auto lanes, const std::uint32_t* j, int used) {
     using M = decltype(lanes);
@@ -199,7 +199,7 @@ inline SampleSums sampleTerms(const FluidState& st, const CubicSplineKernel& ker
     alignas(32) double far[kW], ws[kW], pw[kW], r[3][kW];
     (d_sq >= M::all(support_sq)).store(far);
     w.store(ws);
-    (gatherLanes(lanes, st.pressure.data(), j) * w).store(pw);
+    (gatherLanes(lanes, pressure, j) * w).store(pw);
     (rho_w * dx).store(r[0]);
     (rho_w * dy).store(r[1]);
     (rho_w * dz).store(r[2]);
@@ -215,15 +215,17 @@ inline SampleSums sampleTerms(const FluidState& st, const CubicSplineKernel& ker
   return {w_sum, p_sum, Vec3(rx, ry, rz)};
 }
 
-SampleSums sampleTerms2(const FluidState& st, const CubicSplineKernel& kernel, double support_sq,
-                        const Vec3& xk, const std::uint32_t* particle, std::size_t count) {
-  return sampleTerms<Lanes2>(st, kernel, support_sq, xk, particle, count);
+SampleSums sampleTerms2(const FluidState& st, const double* pressure,
+                        const CubicSplineKernel& kernel, double support_sq, const Vec3& xk,
+                        const std::uint32_t* particle, std::size_t count) {
+  return sampleTerms<Lanes2>(st, pressure, kernel, support_sq, xk, particle, count);
 }
 #if defined(WAKE_HAS_LANES4)
-WAKE_TARGET_AVX SampleSums sampleTerms4(const FluidState& st, const CubicSplineKernel& kernel,
-                                        double support_sq, const Vec3& xk,
-                                        const std::uint32_t* particle, std::size_t count) {
-  return sampleTerms<Lanes4>(st, kernel, support_sq, xk, particle, count);
+WAKE_TARGET_AVX SampleSums sampleTerms4(const FluidState& st, const double* pressure,
+                                        const CubicSplineKernel& kernel, double support_sq,
+                                        const Vec3& xk, const std::uint32_t* particle,
+                                        std::size_t count) {
+  return sampleTerms<Lanes4>(st, pressure, kernel, support_sq, xk, particle, count);
 }
 #endif
 
@@ -505,7 +507,7 @@ void Boundaries::addWallPressure(const Fluid& fluid, const BodyPlacement& at,
 }
 
 void Boundaries::addBodyPressure(const BodyPlacement& at, const SamplePressure& pressure,
-                                 std::vector<Wrench>& reaction) const {
+                                 std::vector<Wrench>& reaction, bool dry_only) const {
   for (std::size_t m = 0; m < moving_.size(); ++m) {
     const MovingBody& mb = moving_[m];
     if (!bodies_[mb.body].settings.twoWay()) continue;
@@ -516,7 +518,8 @@ void Boundaries::addBodyPressure(const BodyPlacement& at, const SamplePressure& 
     // In body space, in the samples' (fixed) order: the same bits on any number of threads.
     Vec3 f = Vec3::Zero(), torque = Vec3::Zero();
     for (std::size_t k = 0; k < set.position.size(); ++k) {
-      if (force[k] == 0.0) continue;  // dry: no fluid near
+      if (force[k] == 0.0) continue;                     // dry: no fluid near, no contact
+      if (dry_only && pressure.wet[m + 1][k]) continue;  // the solver's share
       const Vec3& n = set.normal[k];
       const Vec3 df = -force[k] * n;
       f += df;
@@ -563,33 +566,55 @@ void Boundaries::transposePairs(WallPairs& pairs) const {
 }
 
 void Boundaries::computeSamplePressure(const Fluid& fluid, const BodyPlacement& at,
-                                       const Vec3& gravity, WallPairs& pairs,
-                                       SamplePressure& out) const {
+                                       const Vec3& gravity, WallPairs& pairs, SamplePressure& out,
+                                       bool two_way_only) const {
   if (pairs.particles != fluid.state().size())
     throw std::logic_error("Boundaries::computeSamplePressure before addWallTerms");
   transposePairs(pairs);
+  const FluidState& st = fluid.state();
+  const std::vector<double>& pressure =
+      two_way_only && st.keepsPressureMean() ? st.pressure_mean : st.pressure;
   out.p_rho2.resize(moving_.size() + 1);
   out.surface_force.resize(moving_.size() + 1);
-  samplePressure(fluid, static_, Mat3::Identity(), Vec3::Zero(), gravity, false, pairs.offset[0],
-                 pairs.particle[0], out.p_rho2[0], out.surface_force[0]);
+  out.wet.resize(moving_.size() + 1);
+  if (two_way_only) {
+    out.p_rho2[0].clear();
+    out.surface_force[0].clear();
+    out.wet[0].clear();
+  } else {
+    samplePressure(fluid, pressure, static_, Mat3::Identity(), Vec3::Zero(), gravity, false,
+                   pairs.offset[0], pairs.particle[0], out.p_rho2[0], out.surface_force[0],
+                   out.wet[0]);
+  }
   for (std::size_t m = 0; m < moving_.size(); ++m) {
     const BodyFrame& f = at[moving_[m].body];
-    samplePressure(fluid, moving_[m].samples, f.rotation, f.pose.position, gravity,
-                   bodies_[moving_[m].body].settings.twoWay(), pairs.offset[m + 1],
-                   pairs.particle[m + 1], out.p_rho2[m + 1], out.surface_force[m + 1]);
+    const bool two_way = bodies_[moving_[m].body].settings.twoWay();
+    if (two_way_only && !two_way) {
+      out.p_rho2[m + 1].clear();
+      out.surface_force[m + 1].clear();
+      out.wet[m + 1].clear();
+      continue;
+    }
+    samplePressure(fluid, pressure, moving_[m].samples, f.rotation, f.pose.position, gravity,
+                   two_way, pairs.offset[m + 1], pairs.particle[m + 1], out.p_rho2[m + 1],
+                   out.surface_force[m + 1], out.wet[m + 1]);
   }
 }
 
-void Boundaries::samplePressure(const Fluid& fluid, const SampleSet& set, const Mat3& rotation,
-                                const Vec3& origin, const Vec3& gravity, bool two_way,
+void Boundaries::samplePressure(const Fluid& fluid, const std::vector<double>& pressure,
+                                const SampleSet& set, const Mat3& rotation, const Vec3& origin,
+                                const Vec3& gravity, bool two_way,
                                 const std::vector<std::uint32_t>& offset,
                                 const std::vector<std::uint32_t>& particle,
-                                std::vector<double>& p_rho2, std::vector<double>& force) const {
+                                std::vector<double>& p_rho2, std::vector<double>& force,
+                                std::vector<std::uint8_t>& wet) const {
   const std::size_t n = set.position.size();
   p_rho2.assign(n, 0.0);
   force.assign(two_way ? n : 0, 0.0);
+  wet.assign(two_way ? n : 0, 0);
   const FluidState& st = fluid.state();
   if (st.size() == 0 || n == 0) return;
+  const double* pressure_of = pressure.data();
   const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
   const std::int64_t count = static_cast<std::int64_t>(n);
   auto terms = sampleTerms2;
@@ -606,13 +631,14 @@ void Boundaries::samplePressure(const Fluid& fluid, const SampleSet& set, const 
       const std::uint32_t* near = particle.data() + offset[k];
       const std::size_t near_count = offset[k + 1] - offset[k];
       // sum_a W_ka, sum_a P_a W_ka and sum_a rho_a (x_k - x_a) W_ka
-      const SampleSums sums = terms(st, kernel_, support_sq, xk, near, near_count);
+      const SampleSums sums = terms(st, pressure_of, kernel_, support_sq, xk, near, near_count);
       const double w_sum = sums.w;
       if (w_sum == 0.0) continue;
       const double p = std::max(0.0, (sums.p + gravity.dot(sums.rise)) / w_sum);
-      if (p == 0.0) continue;
-      const double rho = fluid_.densityAt(p);
-      p_rho2[k] = p / (rho * rho);
+      if (p > 0.0) {
+        const double rho = fluid_.densityAt(p);
+        p_rho2[k] = p / (rho * rho);
+      }
       if (!two_way) continue;
       // The surface element force P^s_k A_k (addBodyPressure): the same estimate from the
       // fluid in front of the face only, as a thin wall's sample has the fluid of the other
@@ -625,10 +651,12 @@ void Boundaries::samplePressure(const Fluid& fluid, const SampleSet& set, const 
       front.clear();
       for (std::size_t t = 0; t < near_count; ++t)
         if ((st.position[near[t]] - xk).dot(normal) > -radius_) front.push_back(near[t]);
-      const SampleSums face = front.size() == near_count
-                                  ? sums
-                                  : terms(st, kernel_, support_sq, xk, front.data(), front.size());
+      const SampleSums face =
+          front.size() == near_count
+              ? sums
+              : terms(st, pressure_of, kernel_, support_sq, xk, front.data(), front.size());
       if (!(face.w > 0.0)) continue;
+      wet[k] = 1;
       const double ps = (face.p + gravity.dot(face.rise)) / face.w +
                         fluid_.rest_density * radius_ * gravity.dot(normal);
       force[k] = std::max(0.0, ps) * set.area[k];

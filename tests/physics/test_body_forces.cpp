@@ -49,7 +49,8 @@ struct HeldCase {
   const char* label;
   FluidSolver solver;
   CouplingMethod method;
-  bool sphere;  // else a cube
+  bool sphere;            // else a cube
+  bool on_floor = false;  // resting on the tank's floor (else 6 cm below the surface)
 };
 
 struct HeldForce {
@@ -78,7 +79,7 @@ HeldForce heldForce(const HeldCase& c, double end) {
   body.kind = BodyKind::Dynamic;
   body.shape = c.sphere ? makeSphere(half) : makeBox(Vec3::Constant(half));
   const double volume = c.sphere ? 4.0 / 3.0 * M_PI * half * half * half : 8 * half * half * half;
-  body.pose.position = Vec3(width / 2, height - 0.06, width / 2);
+  body.pose.position = Vec3(width / 2, c.on_floor ? half : height - 0.06, width / 2);
   body.mass = HeldBody::kHeldMass;
   body.inertia = Vec3::Constant(HeldBody::kHeldMass * half * half);
   s.bodies = {tank, body};
@@ -118,7 +119,8 @@ TEST_P(HeldAtRest, FeelsArchimedesWithoutAOneSidedControl) {
   // mm, 1 s): sphere 0.958, cube 0.998 of Archimedes, the control's share under 0.02 of it;
   // the sphere's 4 % is the fluid's pressure just below it, a few pascals under
   // hydrostatic (docs/forces.md). The divergence-free solver keeps its contacts at the
-  // full radius: sphere 0.950, 0.068 of it from the control.
+  // full radius: sphere 0.950, 0.068 of it from the control. A cube resting on the floor
+  // (its bottom face dry, addContactPressure): 0.950, local and global.
   const HeldCase& c = GetParam();
   const HeldForce f = heldForce(c, 1.0);
   EXPECT_EQ(f.max_penetrating, 0u);
@@ -135,7 +137,13 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         HeldCase{"wcsph_local_sphere", FluidSolver::Wcsph, CouplingMethod::Local, true},
         HeldCase{"wcsph_global_cube", FluidSolver::Wcsph, CouplingMethod::Global, false},
-        HeldCase{"dfsph_local_sphere", FluidSolver::Dfsph, CouplingMethod::Local, true}),
+        HeldCase{"dfsph_local_sphere", FluidSolver::Dfsph, CouplingMethod::Local, true},
+        // Resting on the floor: the contact face feels the water's pressure too
+        // (Boundaries::addContactPressure), so the total is still Archimedes'.
+        HeldCase{"wcsph_global_cube_on_floor", FluidSolver::Wcsph, CouplingMethod::Global, false,
+                 true},
+        HeldCase{"wcsph_local_cube_on_floor", FluidSolver::Wcsph, CouplingMethod::Local, false,
+                 true}),
     [](const ::testing::TestParamInfo<HeldCase>& i) { return std::string(i.param.label); });
 
 }  // namespace

@@ -363,6 +363,55 @@ TEST_P(BodyContact, BoxStaysStackedOnAHeavierBoxUnderWater) {
   EXPECT_EQ(world.simulation().maxPenetrating(), 0u);
 }
 
+/// A light box (0.6 of the water's density) started at rest on a heavy box (or on the
+/// floor) under water, walls and boxes with `slip`: the water gets under its contact face
+/// as into any real gap, so it rises at once. Returns how far its bottom rose in 0.4 s.
+double lightBoxRise(FluidSolver solver, bool on_box, double slip) {
+  const Vec3 size(0.24, 0.25, 0.16);
+  SimulationSettings sim = fluidBox(Vec3(size.x(), 0.16, size.z()), CouplingMethod::Global);
+  sim.solver = solver;
+  const Vec3 bottom_half(0.06, 0.03, 0.05), top_half(0.04, 0.02, 0.04);
+  const double base = on_box ? 2 * bottom_half.y() : 0.0;
+  const Vec3 top_at(0.12, base + top_half.y(), 0.08);
+  std::vector<BodySpec> bodies = {tank(size), box("light", top_half, 600, top_at)};
+  if (on_box) bodies.push_back(box("heavy", bottom_half, 3000, Vec3(0.12, bottom_half.y(), 0.08)));
+  for (BodySpec& b : bodies)
+    b.slip = slip;
+  SceneWorld world(sim, bodies);
+  world.coupled().advanceTo(0.4);
+  const BodyState light = world.simulation().bodyStates()[1];
+  const double rise = light.position.y() - top_at.y();
+  std::printf(
+      "[ no suction ] %s light box on %s, slip %.0f: rose %.4f m in 0.4 s, speed %.3f m/s up, "
+      "tilt %.3f rad, max_penetrating %zu\n",
+      solver == FluidSolver::Dfsph ? "dfsph" : "wcsph", on_box ? "a heavy box" : "the floor", slip,
+      rise, light.linear_velocity.y(),
+      std::acos(std::min(1.0, (light.orientation * Vec3::UnitY()).y())),
+      world.simulation().maxPenetrating());
+  EXPECT_EQ(world.simulation().maxPenetrating(), 0u);
+  if (on_box) {
+    const BodyState heavy = world.simulation().bodyStates()[2];
+    EXPECT_NEAR(heavy.position.y(), bottom_half.y(), 0.002);  // the heavy one stays put
+  }
+  return rise;
+}
+
+// With the divergence-free solver the light box stays (docs/forces.md, "No suction"): its
+// density solve pushes a body that rests on another as if nothing held it.
+TEST(NoSuction, LightBoxOnAHeavyBoxUnderWaterRises) {
+  for (const double slip : {0.0, 1.0}) {
+    const double rise = lightBoxRise(FluidSolver::Wcsph, true, slip);
+    EXPECT_GT(rise, 0.02) << "slip " << slip;
+  }
+}
+
+TEST(NoSuction, LightBoxOnTheFloorUnderWaterRises) {
+  for (const double slip : {0.0, 1.0}) {
+    const double rise = lightBoxRise(FluidSolver::Wcsph, false, slip);
+    EXPECT_GT(rise, 0.02) << "slip " << slip;
+  }
+}
+
 TEST_P(BodyContact, KinematicPlatePressesABoxOnTheFloorAndTheFluidBetweenGoesSideways) {
   // A dense box rests on the floor under 6 cm of water; a kinematic plate comes down on
   // it at 0.1 m/s and presses it into the floor. The fluid between the plate and the box
