@@ -548,12 +548,13 @@ double Boundaries::signedDistance(const Vec3& x, const BodyPlacement& at) const 
 }
 
 void Boundaries::addContactPressure(const BodyPlacement& at, const Vec3& gravity,
-                                    SamplePressure& pressure) const {
+                                    SamplePressure& pressure, bool wet_too) const {
   const double reach = radius_ + radius_;  // the gap no particle crosses: 2 r
   const double rho0 = fluid_.rest_density;
   std::vector<std::uint32_t> contact, level, next;
   std::vector<std::uint8_t> state;  // 0 neither, 1 known, 2 contact (unknown), 3 reached
   std::vector<double> value;        // P^s (Pa) of the known and the reached
+  pressure.touching.resize(moving_.size() + 1);
   for (std::size_t m = 0; m < moving_.size(); ++m) {
     const MovingBody& mb = moving_[m];
     if (!bodies_[mb.body].settings.twoWay()) continue;
@@ -566,19 +567,21 @@ void Boundaries::addContactPressure(const BodyPlacement& at, const Vec3& gravity
     const BodyFrame& frame = at[mb.body];
     // The dry samples whose surface point another body's surface is within reach of.
     contact.clear();
+    std::vector<std::uint8_t>& touch = pressure.touching[m + 1];
+    touch.assign(wet_too ? n : 0, 0);
     std::size_t known = 0;
     for (std::size_t k = 0; k < n; ++k) {
-      if (wet[k]) {
-        ++known;
-        continue;
-      }
+      if (wet[k]) ++known;
+      if (wet[k] && !wet_too) continue;
       const Vec3 s =
           frame.rotation * (set.position[k] + radius_ * set.normal[k]) + frame.pose.position;
       bool touching = false;
       forEachBodyDistance(s, at, [&](std::uint32_t body, bool, double d) {
         if (body != mb.body && d < reach) touching = true;
       });
-      if (touching) contact.push_back(static_cast<std::uint32_t>(k));
+      if (!touching) continue;
+      if (wet_too) touch[k] = 1;
+      if (!wet[k]) contact.push_back(static_cast<std::uint32_t>(k));
     }
     if (contact.empty() || known == 0) continue;
     state.assign(n, 0);

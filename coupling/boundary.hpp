@@ -108,6 +108,9 @@ struct SamplePressure {
   /// Two-way bodies' sets only: 1 where fluid lies in front of the sample's face (its
   /// surface_force is the fluid's), 0 where none does (dry: addContactPressure).
   std::vector<std::vector<std::uint8_t>> wet;
+  /// Two-way bodies' sets, filled by addContactPressure(..., wet_too = true) only: 1 where
+  /// the sample's surface point lies within 2 r of another body or a wall, wet or dry.
+  std::vector<std::vector<std::uint8_t>> touching;
 };
 
 /// The (fluid particle, sample) pairs within the kernel support of one step: found once by
@@ -257,10 +260,12 @@ class Boundaries {
   /// to within the difference of the two, a discretisation error that the spacing shrinks. The
   /// closed surface's areas are balanced at finalize() so that a uniform pressure pushes it nowhere
   /// (sum_k A_k n_k = 0).
-  /// With `dry_only`, only the dry samples' (addContactPressure's: the divergence-free
-  /// solver moves the bodies with its own pressure where fluid is near).
+  /// With `touching_only`, only the samples that touch another body or a wall
+  /// (SamplePressure::touching): under the divergence-free solver the solves' impulses are
+  /// the body's pressure where fluid is near, but at a contact face, and along its rim where
+  /// the fluid beside it pushes sideways, they give none.
   void addBodyPressure(const BodyPlacement& at, const SamplePressure& pressure,
-                       std::vector<Wrench>& reaction, bool dry_only = false) const;
+                       std::vector<Wrench>& reaction, bool touching_only = false) const;
   /// The pressure on a two-way body's contact faces, into `pressure.surface_force` before
   /// addBodyPressure: where the body touches another body or a wall, no particle fits
   /// between the two faces, yet real water reaches any real gap. A dry sample (no fluid in
@@ -272,8 +277,9 @@ class Boundaries {
   /// leads to it (a contact out of the water). Without it a light body resting on a heavy
   /// one or on the floor under water is held down like a suction cup: the water's full
   /// load on its top and nothing under it.
-  void addContactPressure(const BodyPlacement& at, const Vec3& gravity,
-                          SamplePressure& pressure) const;
+  /// `wet_too`: also mark the wetted samples within that reach (SamplePressure::touching).
+  void addContactPressure(const BodyPlacement& at, const Vec3& gravity, SamplePressure& pressure,
+                          bool wet_too = false) const;
 
   /// The walls' and bodies' terms of the divergence-free solver (sph/dfsph.hpp), from this
   /// step's pairs (addWallTerms) with the bodies at `at`, into `out` (SolverBoundary):

@@ -507,7 +507,7 @@ void Boundaries::addWallPressure(const Fluid& fluid, const BodyPlacement& at,
 }
 
 void Boundaries::addBodyPressure(const BodyPlacement& at, const SamplePressure& pressure,
-                                 std::vector<Wrench>& reaction, bool dry_only) const {
+                                 std::vector<Wrench>& reaction, bool touching_only) const {
   for (std::size_t m = 0; m < moving_.size(); ++m) {
     const MovingBody& mb = moving_[m];
     if (!bodies_[mb.body].settings.twoWay()) continue;
@@ -518,8 +518,8 @@ void Boundaries::addBodyPressure(const BodyPlacement& at, const SamplePressure& 
     // In body space, in the samples' (fixed) order: the same bits on any number of threads.
     Vec3 f = Vec3::Zero(), torque = Vec3::Zero();
     for (std::size_t k = 0; k < set.position.size(); ++k) {
-      if (force[k] == 0.0) continue;                     // dry: no fluid near, no contact
-      if (dry_only && pressure.wet[m + 1][k]) continue;  // the solver's share
+      if (force[k] == 0.0) continue;  // dry: no fluid near, no contact
+      if (touching_only && !pressure.touching[m + 1][k]) continue;  // the solver's share
       const Vec3& n = set.normal[k];
       const Vec3 df = -force[k] * n;
       f += df;

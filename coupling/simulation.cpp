@@ -427,14 +427,16 @@ void Simulation::computeFluidForces() {
     t0 = Clock::now();
     boundaries_->solverTerms(*fluid_, work_.placed, work_.wall_pairs, model_.gravity,
                              work_.solver_boundary);
-    // The solver's pressure pushes the bodies where fluid is near; their contact faces get
-    // the pressure of the water next to them (addContactPressure), from its running mean.
+    // The solver's pressure pushes the bodies where fluid is near; their contact faces, rim
+    // included, get the pressure of the water next to them (addContactPressure), from its
+    // running mean.
     if (boundaries_->hasTwoWayBodies()) {
       boundaries_->computeSamplePressure(*fluid_, work_.placed, model_.gravity, work_.wall_pairs,
                                          work_.sample_pressure, /*two_way_only=*/true);
-      boundaries_->addContactPressure(work_.placed, model_.gravity, work_.sample_pressure);
+      boundaries_->addContactPressure(work_.placed, model_.gravity, work_.sample_pressure,
+                                      /*wet_too=*/true);
       boundaries_->addBodyPressure(work_.placed, work_.sample_pressure, work_.wall_reaction,
-                                   /*dry_only=*/true);
+                                   /*touching_only=*/true);
     }
     // The two-way bodies as the solves see them: their masses now, and the density solve's
     // push on them in the last step, which their other forces are taken to balance.
