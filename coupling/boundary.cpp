@@ -552,8 +552,10 @@ void Boundaries::addContactPressure(const BodyPlacement& at, const Vec3& gravity
   const double reach = radius_ + radius_;  // the gap no particle crosses: 2 r
   const double rho0 = fluid_.rest_density;
   std::vector<std::uint32_t> contact, level, next;
-  std::vector<std::uint8_t> state;  // 0 neither, 1 known, 2 contact (unknown), 3 reached
-  std::vector<double> value;        // P^s (Pa) of the known and the reached
+  // 0 neither, 1 known (wet), 2 contact not yet reached, 4 queued for the next level,
+  // 3 reached
+  std::vector<std::uint8_t> state;
+  std::vector<double> value;  // P^s (Pa) of the known and the reached
   pressure.touching.resize(moving_.size() + 1);
   for (std::size_t m = 0; m < moving_.size(); ++m) {
     const MovingBody& mb = moving_[m];
@@ -596,9 +598,10 @@ void Boundaries::addContactPressure(const BodyPlacement& at, const Vec3& gravity
     // Gravity in the body's frame: the hydrostatic step from one surface point to another.
     const Vec3 g = frame.rotation.transpose() * gravity;
     auto surface = [&](std::uint32_t k) { return Vec3(set.position[k] + radius_ * set.normal[k]); };
-    // A sample's neighbours on the surface: within 1.5 sample spacings (2 r), so that a
-    // face's square lattice links its diagonals too.
-    const double link = 1.5 * reach, link_sq = link * link;
+    // A sample's neighbours on the surface: within 1.5 sample spacings (3 r; the spacing is
+    // 2 r), so that a face's square lattice links its diagonals too. The grid is searched
+    // over the kernel support's cells, so the link may not be longer than the support.
+    const double link = std::min(1.5 * reach, kernel_.supportRadius()), link_sq = link * link;
     auto forEachLinked = [&](std::uint32_t k, auto&& f) {
       const Vec3& p = set.position[k];
       set.grid.forEachRangeInSphere(p, set.density_reach, link, false,
