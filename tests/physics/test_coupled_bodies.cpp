@@ -260,6 +260,46 @@ TEST_P(BuoyancySpacing, DraftErrorShrinksWithTheSpacing) {
   }
 }
 
+/// The lightest boxes, 0.25 and 0.3 the fluid's density, at three particle spacings of
+/// draft (r = draft / 6: 4.17 and 5 mm): dropped from 1 cm (2 s) and started at rest at
+/// their draft (1 s), local and global control; the draft within 3 % of Archimedes'.
+/// WCSPH: +0.1 to +0.6 % (slow: eight runs, 7.5 min on one thread). DFSPH floats these boxes
+/// 2.6-5.2 % too high (docs/forces.md, "Floating and sinking boxes"): its cases are
+/// instantiated disabled, `--gtest_also_run_disabled_tests
+/// --gtest_filter='DISABLED_Ratios/LightDraft*'` runs them.
+using LightDraftCase = std::tuple<double, CouplingMethod, FluidSolver, bool>;
+class LightDraft : public ::testing::TestWithParam<LightDraftCase> {};
+
+TEST_P(LightDraft, FloatsAtTheArchimedesDraftAtThreeSpacings) {
+  const auto [ratio, method, solver, placed] = GetParam();
+  const double draft = ratio * 0.10, radius = draft / 6.0;
+  const Floating f = floatBox(ratio, method, placed ? 1.0 : 2.0, 0.0, placed, solver, radius);
+  EXPECT_NEAR(f.draft, draft, 0.03 * draft);
+  EXPECT_LT(f.tilt, 0.1);
+  EXPECT_EQ(f.max_penetrating, 0u);
+}
+
+std::string lightDraftName(const ::testing::TestParamInfo<LightDraftCase>& param) {
+  const LightDraftCase& c = param.param;
+  return std::string(std::get<2>(c) == FluidSolver::Dfsph ? "dfsph_" : "wcsph_") +
+         name(std::get<1>(c)) + "_density_" +
+         std::to_string(int(std::lround(100 * std::get<0>(c)))) +
+         (std::get<3>(c) ? "_placed" : "_dropped");
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Ratios, LightDraft,
+    ::testing::Combine(::testing::Values(0.25, 0.3),
+                       ::testing::Values(CouplingMethod::Local, CouplingMethod::Global),
+                       ::testing::Values(FluidSolver::Wcsph), ::testing::Bool()),
+    lightDraftName);
+INSTANTIATE_TEST_SUITE_P(
+    DISABLED_Ratios, LightDraft,
+    ::testing::Combine(::testing::Values(0.25, 0.3),
+                       ::testing::Values(CouplingMethod::Local, CouplingMethod::Global),
+                       ::testing::Values(FluidSolver::Dfsph), ::testing::Bool()),
+    lightDraftName);
+
 /// Dropped onto the fluid, a box denser than the fluid sinks until it rests on the last
 /// layer of particles: the walls' pressure term holds the layer at a wall at the fluid's
 /// own pressure, so the film's pressure is the box's weight, not a wall layer pressed
