@@ -287,18 +287,16 @@ std::string lightDraftName(const ::testing::TestParamInfo<LightDraftCase>& param
          (std::get<3>(c) ? "_placed" : "_dropped");
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Ratios, LightDraft,
-    ::testing::Combine(::testing::Values(0.25, 0.3),
-                       ::testing::Values(CouplingMethod::Local, CouplingMethod::Global),
-                       ::testing::Values(FluidSolver::Wcsph), ::testing::Bool()),
-    lightDraftName);
-INSTANTIATE_TEST_SUITE_P(
-    DISABLED_Ratios, LightDraft,
-    ::testing::Combine(::testing::Values(0.25, 0.3),
-                       ::testing::Values(CouplingMethod::Local, CouplingMethod::Global),
-                       ::testing::Values(FluidSolver::Dfsph), ::testing::Bool()),
-    lightDraftName);
+/// Both density ratios, both control methods, dropped and placed, under `solver`.
+auto lightDraftCases(FluidSolver solver) {
+  return ::testing::Combine(::testing::Values(0.25, 0.3),
+                            ::testing::Values(CouplingMethod::Local, CouplingMethod::Global),
+                            ::testing::Values(solver), ::testing::Bool());
+}
+
+INSTANTIATE_TEST_SUITE_P(Ratios, LightDraft, lightDraftCases(FluidSolver::Wcsph), lightDraftName);
+INSTANTIATE_TEST_SUITE_P(DISABLED_Ratios, LightDraft, lightDraftCases(FluidSolver::Dfsph),
+                         lightDraftName);
 
 /// Dropped onto the fluid, a box denser than the fluid sinks until it rests on the last
 /// layer of particles: the walls' pressure term holds the layer at a wall at the fluid's
