@@ -24,12 +24,15 @@ struct Options {
   bool dfsph = false;  ///< --solver dfsph: the divergence-free solver instead of WCSPH
   /// --skin F: the neighbour lists' skin, F x the support radius (< 0: the automatic one).
   double skin = -1.0;
+  /// --pressure-gradient consistent|symmetric: WCSPH's pressure force (FluidParams).
+  PressureGradient pressure_gradient = PressureGradient::Consistent;
 };
 
 [[noreturn]] inline void usage(const char* program, const char* msg) {
   std::fprintf(stderr,
                "error: %s\nusage: %s [--particles N] [--steps S] [--warmup W] [--threads 1,2]"
-               " [--bodies B] [--scene FILE] [--solver wcsph|dfsph] [--skin F]\n",
+               " [--bodies B] [--scene FILE] [--solver wcsph|dfsph] [--skin F]"
+               " [--pressure-gradient consistent|symmetric]\n",
                msg, program);
   std::exit(2);
 }
@@ -54,6 +57,12 @@ inline Options parse(int argc, char** argv) {
       const std::string s = value("--solver");
       if (s != "wcsph" && s != "dfsph") usage(argv[0], "--solver must be wcsph or dfsph");
       o.dfsph = s == "dfsph";
+    } else if (!std::strcmp(argv[i], "--pressure-gradient")) {
+      const std::string s = value("--pressure-gradient");
+      if (s != "consistent" && s != "symmetric")
+        usage(argv[0], "--pressure-gradient must be consistent or symmetric");
+      o.pressure_gradient =
+          s == "symmetric" ? PressureGradient::Symmetric : PressureGradient::Consistent;
     } else if (!std::strcmp(argv[i], "--skin")) {
       o.skin = std::stod(value("--skin"));
       if (!(o.skin >= 0) || !std::isfinite(o.skin)) usage(argv[0], "--skin must be >= 0");

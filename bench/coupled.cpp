@@ -3,6 +3,7 @@
 // position correction, the bodies' prediction and Bullet step) as a fraction of it.
 //
 //   wake_bench_coupled [--particles N] [--bodies B] [--steps S] [--warmup W] [--threads 1,2]
+//                      [--pressure-gradient consistent|symmetric]
 #include "bench/common.hpp"
 #include "bullet_bridge/scene_world.hpp"
 #include "io/process.hpp"
@@ -21,12 +22,14 @@ namespace {
 /// A pool 20 cm deep (spacing 1 cm) in a tank twice as long as wide, with `bodies`
 /// boxes (10 x 6 x 10 cm, 500 kg/m^3) resting on the surface in a grid.
 std::pair<SimulationSettings, std::vector<BodySpec>> pool(long particles, int bodies,
-                                                          CouplingMethod method) {
+                                                          CouplingMethod method,
+                                                          PressureGradient gradient) {
   const double r = 0.005, s = 2 * r, depth = 0.2;
   const double area = double(particles) / (depth / s) * s * s;
   const double width = std::sqrt(area / 2.0), length = 2.0 * width;
   SimulationSettings sim;
   sim.fluid.particle_radius = r;
+  sim.fluid.pressure_gradient = gradient;
   sim.method = method;
   sim.blocks.push_back({Vec3::Zero(), Vec3(length, depth, width)});
   std::vector<BodySpec> specs(1);
@@ -66,7 +69,7 @@ int main(int argc, char** argv) {
     double single = 0.0;
     for (int threads : opt.threads) {
       omp_set_num_threads(threads);
-      auto [settings, specs] = pool(opt.particles, opt.bodies, method);
+      auto [settings, specs] = pool(opt.particles, opt.bodies, method, opt.pressure_gradient);
       SceneWorld world(settings, specs);
       CoupledWorld& coupled = world.coupled();
       coupled.start();

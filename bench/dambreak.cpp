@@ -5,6 +5,7 @@
 //
 //   wake_bench_dambreak [--particles N] [--steps S] [--warmup W] [--threads 1,2]
 //                       [--scene FILE] [--solver wcsph|dfsph]
+//                       [--pressure-gradient consistent|symmetric]
 //
 // Without --scene: a synthetic column (nx x 2nx x nx particles of radius 5 mm) at one end
 // of a tank four columns long. With --scene: that scene file (its static bodies through
@@ -63,12 +64,15 @@ Bench make(const Options& opt) {
   if (opt.scene.empty()) {
     SimulationSettings s = damBreak(opt.particles);
     if (opt.dfsph) s.solver = FluidSolver::Dfsph;
+    s.fluid.pressure_gradient = opt.pressure_gradient;
     if (opt.skin >= 0) s.neighbor_skin = opt.skin * s.fluid.supportRadius();
     b.own = std::make_unique<Simulation>(s);
     return b;
   }
   SceneFile scene = loadScene(opt.scene);
   if (opt.dfsph) scene.sim.solver = FluidSolver::Dfsph;
+  if (!opt.dfsph && scene.sim.solver == FluidSolver::Wcsph)
+    scene.sim.fluid.pressure_gradient = opt.pressure_gradient;
   if (opt.particles_given)
     overrideResolution(scene, std::cbrt(double(opt.particles) / estimateFluidParticles(scene.sim)));
   if (opt.skin >= 0) scene.sim.neighbor_skin = opt.skin * scene.sim.fluid.supportRadius();

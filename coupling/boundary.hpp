@@ -102,6 +102,7 @@ struct BodyPlacement {
 /// fills it, addWallPressure reads it. Scratch of the step.
 struct SamplePressure {
   std::vector<std::vector<double>> p_rho2;
+  std::vector<std::vector<double>> pressure;  ///< P_k (Pa, >= 0), as p_rho2
   /// Two-way bodies' sets only (empty for the others): each sample's surface element force
   /// P^s_k A_k (N, >= 0; addBodyPressure).
   std::vector<std::vector<double>> surface_force;
@@ -240,12 +241,18 @@ class Boundaries {
                              bool two_way_only = false) const;
 
   /// The walls' pressure force on the fluid, once the samples' pressure is known: the
-  /// samples are neighbours in the fluid's symmetric pressure term,
+  /// samples are neighbours in the fluid's pressure term, with the fluid's form
+  /// (FluidParams::pressure_gradient). PressureGradient::Symmetric:
   ///   a_a -= sum_k rho0 V_k (P_a / rho_a^2 + P_k / rho_k^2) grad W_ak,
-  /// which at rest holds the layer at a wall at the fluid's own spacing and pressure. Adds
-  /// to `extra` (sized n when empty). The bodies' side is addBodyPressure's.
+  /// which at rest holds the layer at a wall at the fluid's own spacing and pressure, added
+  /// to `extra` (sized n when empty). PressureGradient::Consistent: the samples' share of
+  /// the gradient's sums, added to `sums` (Fluid::wallPressureSums, this step's: sized by
+  /// Fluid::computePressure), and each particle's reference lowered to the lowest
+  /// pressure of the samples within its support; `extra` is left as it is. The bodies'
+  /// side is addBodyPressure's.
   void addWallPressure(const Fluid& fluid, const BodyPlacement& at, const WallPairs& pairs,
-                       const SamplePressure& pressure, std::vector<Vec3>& extra) const;
+                       const SamplePressure& pressure, std::vector<Vec3>& extra,
+                       WallPressureSums& sums) const;
   /// The fluid's pressure force and torque (about the centre of mass) on each two-way body,
   /// added to `reaction`: the surface integral -sum_k P^s_k A_k n_k over its samples, each
   /// standing for the area A_k of the exact surface (geometry's sampling) with its normal
@@ -482,6 +489,11 @@ class Boundaries {
   double wallSums(const SampleSet& set, const Vec3& p, double nu, const Vec3& u, const Vec3& omega,
                   Vec3& shear, Vec3* moment, std::vector<std::uint32_t>* record,
                   const std::uint32_t* candidates = nullptr, std::size_t count = 0) const;
+  /// addWallPressure's PressureGradient::Consistent part for particle i: its samples'
+  /// terms added to entry i of `sums`.
+  void consistentWallSums(const Fluid& fluid, const BodyPlacement& at, const WallPairs& pairs,
+                          const SamplePressure& pressure, std::size_t i,
+                          WallPressureSums& sums) const;
   /// sum_k V_k (pr2 + P_k / rho_k^2) grad W_ak over the `count` samples `near` of one set at
   /// p (set space).
   Vec3 pressureSum(const SampleSet& set, const std::vector<double>& p_rho2, const Vec3& p,
@@ -526,7 +538,8 @@ class Boundaries {
                       const Mat3& rotation, const Vec3& origin, const Vec3& gravity, bool two_way,
                       const std::vector<std::uint32_t>& offset,
                       const std::vector<std::uint32_t>& particle, std::vector<double>& p_rho2,
-                      std::vector<double>& force, std::vector<std::uint8_t>& wet) const;
+                      std::vector<double>& p_out, std::vector<double>& force,
+                      std::vector<std::uint8_t>& wet) const;
 
   FluidParams fluid_;
   CubicSplineKernel kernel_;

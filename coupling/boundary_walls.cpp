@@ -470,7 +470,7 @@ void Boundaries::wallPass(const Fluid& fluid, const BodyPlacement& at, std::vect
 
 void Boundaries::addWallPressure(const Fluid& fluid, const BodyPlacement& at,
                                  const WallPairs& pairs, const SamplePressure& pressure,
-                                 std::vector<Vec3>& extra) const {
+                                 std::vector<Vec3>& extra, WallPressureSums& sums) const {
   const FluidState& st = fluid.state();
   const std::size_t n = st.size(), nb = bodies_.size();
   if (n == 0 || nb == 0) return;
@@ -481,9 +481,20 @@ void Boundaries::addWallPressure(const Fluid& fluid, const BodyPlacement& at,
   if (!ready) throw std::logic_error("Boundaries::addWallPressure before computeSamplePressure");
   if (pairs.particles != n)
     throw std::logic_error("Boundaries::addWallPressure before addWallTerms");
+  const std::int64_t sn = static_cast<std::int64_t>(n);
+  if (fluid.params().pressure_gradient == PressureGradient::Consistent) {
+    if (sums.difference.size() != n || sums.moment.size() != n || sums.spread.size() != n ||
+        sums.reference.size() != n || pressure.pressure.size() != p_rho2.size())
+      throw std::logic_error("Boundaries::addWallPressure: the pressure sums are not this step's");
+    if (sums.symmetric.size() != n)
+      throw std::logic_error("Boundaries::addWallPressure: the pressure sums are not this step's");
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < sn; ++i)
+      consistentWallSums(fluid, at, pairs, pressure, static_cast<std::size_t>(i), sums);
+    return;
+  }
   if (extra.empty()) extra.assign(n, Vec3::Zero());
   const double rho0 = fluid_.rest_density;
-  const std::int64_t sn = static_cast<std::int64_t>(n);
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < sn; ++i) {
     const std::size_t c = static_cast<std::size_t>(i) / kChunk;
@@ -504,6 +515,69 @@ void Boundaries::addWallPressure(const Fluid& fluid, const BodyPlacement& at,
         });
     extra[i] += rho0 * a;
   }
+}
+
+void Boundaries::consistentWallSums(const Fluid& fluid, const BodyPlacement& at,
+                                    const WallPairs& pairs, const SamplePressure& pressure,
+                                    std::size_t i, WallPressureSums& sums) const {
+  const FluidState& st = fluid.state();
+  const std::size_t c = i / kChunk;
+  const Vec3 xi = st.position[i];
+  const double pa = st.pressure[i];
+  const double ra2 = 1.0 / (st.density[i] * st.density[i]);
+  const double rho0 = fluid_.rest_density;
+  const double support = kernel_.supportRadius();
+  const double rest2 = 1.0 / (rho0 * rho0);  // 1 / rho_k^2 of a sample at P = 0
+  Vec3 g = Vec3::Zero(), e = Vec3::Zero(), sym = Vec3::Zero();
+  Mat3 b = Mat3::Zero();
+  double ref = sums.reference[i];
+  const double pa2 = pa * ra2;
+  // The segments of addWallTerms: the static set first, then the moving bodies; each
+  // sample's terms in the set's frame, turned into the world's.
+  pairs.forEachSegment(i, c, c * kChunk,
+                       [&](std::uint32_t set, const std::uint32_t* near, std::uint32_t count) {
+                         const SampleSet& samples = set == 0 ? static_ : moving_[set - 1].samples;
+                         const std::vector<double>& pk = pressure.pressure[set];
+                         const std::vector<double>& pr2 = pressure.p_rho2[set];
+                         Vec3 xs = xi;
+                         Mat3 rotation = Mat3::Identity();
+                         if (set != 0) {
+                           const BodyFrame& f = at[moving_[set - 1].body];
+                           rotation = f.rotation;
+                           xs = f.rotation.transpose() * (xi - f.pose.position);
+                         }
+                         Vec3 gs = Vec3::Zero(), es = Vec3::Zero(), ss = Vec3::Zero();
+                         Mat3 bs = Mat3::Zero();
+                         for (std::uint32_t t = 0; t < count; ++t) {
+                           const std::uint32_t k = near[t];
+                           const Vec3 d = xs - samples.position[k];  // x_a - x_k
+                           const double dist = d.norm();
+                           if (!(dist < support) || dist == 0.0) continue;
+                           const double w = kernel_.derivativeOverR(dist);  // grad_a W_ak = w d
+                           const double v = samples.volume[k];
+                           const double rk2 = pk[k] > 0.0 ? pr2[k] / pk[k] : rest2;
+                           ref = std::min(ref, pk[k]);
+                           gs += (v * (pk[k] - pa) * w) * d;
+                           bs.noalias() -= (v * w) * d * d.transpose();
+                           es += (rho0 * v * (ra2 + rk2) * w) * d;
+                           ss += (rho0 * v * (pa2 + pr2[k]) * w) * d;
+                         }
+                         g += rotation * gs;
+                         e += rotation * es;
+                         sym -= rotation * ss;
+                         b += rotation * bs * rotation.transpose();
+                       });
+  sums.reference[i] = ref;
+  sums.difference[i] += g;
+  sums.spread[i] += e;
+  sums.symmetric[i] += sym;
+  std::array<double, 6>& m = sums.moment[i];
+  m[0] += b(0, 0);
+  m[1] += b(1, 1);
+  m[2] += b(2, 2);
+  m[3] += b(0, 1);
+  m[4] += b(0, 2);
+  m[5] += b(1, 2);
 }
 
 void Boundaries::addBodyPressure(const BodyPlacement& at, const SamplePressure& pressure,
@@ -575,29 +649,32 @@ void Boundaries::computeSamplePressure(const Fluid& fluid, const BodyPlacement& 
   const std::vector<double>& pressure =
       two_way_only && st.keepsPressureMean() ? st.pressure_mean : st.pressure;
   out.p_rho2.resize(moving_.size() + 1);
+  out.pressure.resize(moving_.size() + 1);
   out.surface_force.resize(moving_.size() + 1);
   out.wet.resize(moving_.size() + 1);
   if (two_way_only) {
     out.p_rho2[0].clear();
+    out.pressure[0].clear();
     out.surface_force[0].clear();
     out.wet[0].clear();
   } else {
     samplePressure(fluid, pressure, static_, Mat3::Identity(), Vec3::Zero(), gravity, false,
-                   pairs.offset[0], pairs.particle[0], out.p_rho2[0], out.surface_force[0],
-                   out.wet[0]);
+                   pairs.offset[0], pairs.particle[0], out.p_rho2[0], out.pressure[0],
+                   out.surface_force[0], out.wet[0]);
   }
   for (std::size_t m = 0; m < moving_.size(); ++m) {
     const BodyFrame& f = at[moving_[m].body];
     const bool two_way = bodies_[moving_[m].body].settings.twoWay();
     if (two_way_only && !two_way) {
       out.p_rho2[m + 1].clear();
+      out.pressure[m + 1].clear();
       out.surface_force[m + 1].clear();
       out.wet[m + 1].clear();
       continue;
     }
     samplePressure(fluid, pressure, moving_[m].samples, f.rotation, f.pose.position, gravity,
                    two_way, pairs.offset[m + 1], pairs.particle[m + 1], out.p_rho2[m + 1],
-                   out.surface_force[m + 1], out.wet[m + 1]);
+                   out.pressure[m + 1], out.surface_force[m + 1], out.wet[m + 1]);
   }
 }
 
@@ -606,10 +683,11 @@ void Boundaries::samplePressure(const Fluid& fluid, const std::vector<double>& p
                                 const Vec3& gravity, bool two_way,
                                 const std::vector<std::uint32_t>& offset,
                                 const std::vector<std::uint32_t>& particle,
-                                std::vector<double>& p_rho2, std::vector<double>& force,
-                                std::vector<std::uint8_t>& wet) const {
+                                std::vector<double>& p_rho2, std::vector<double>& p_out,
+                                std::vector<double>& force, std::vector<std::uint8_t>& wet) const {
   const std::size_t n = set.position.size();
   p_rho2.assign(n, 0.0);
+  p_out.assign(n, 0.0);
   force.assign(two_way ? n : 0, 0.0);
   wet.assign(two_way ? n : 0, 0);
   const FluidState& st = fluid.state();
@@ -638,6 +716,7 @@ void Boundaries::samplePressure(const Fluid& fluid, const std::vector<double>& p
       if (p > 0.0) {
         const double rho = fluid_.densityAt(p);
         p_rho2[k] = p / (rho * rho);
+        p_out[k] = p;
       }
       if (!two_way) continue;
       // The surface element force P^s_k A_k (addBodyPressure): the same estimate from the

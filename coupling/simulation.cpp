@@ -470,7 +470,7 @@ void Simulation::computeFluidForces() {
     boundaries_->computeSamplePressure(*fluid_, work_.placed, model_.gravity, work_.wall_pairs,
                                        work_.sample_pressure);
     boundaries_->addWallPressure(*fluid_, work_.placed, work_.wall_pairs, work_.sample_pressure,
-                                 wall_accelerations);
+                                 wall_accelerations, fluid_->wallPressureSums());
     boundaries_->addContactPressure(work_.placed, model_.gravity, work_.sample_pressure);
     boundaries_->addBodyPressure(work_.placed, work_.sample_pressure, work_.wall_reaction);
     timings_.boundary += secondsSince(t0);

@@ -75,10 +75,14 @@ struct FrameWriter::Impl : hdf5::Writer {
     const FluidParams& fluid = sim.fluid().params();
     writeAttribute(root, "scene", scene.name);
     writeAttribute(root, "wake_version", std::string(wakeVersion()));
-    writeAttribute(root, "particle_radius", fluid.particle_radius);     // m
-    writeAttribute(root, "rest_density", fluid.rest_density);           // kg/m^3
-    writeAttribute(root, "speed_of_sound", fluid.speed_of_sound);       // m/s (resolved)
-    writeAttribute(root, "smoothing_ratio", fluid.smoothing_ratio);     // H / spacing
+    writeAttribute(root, "particle_radius", fluid.particle_radius);  // m
+    writeAttribute(root, "rest_density", fluid.rest_density);        // kg/m^3
+    writeAttribute(root, "speed_of_sound", fluid.speed_of_sound);    // m/s (resolved)
+    writeAttribute(root, "smoothing_ratio", fluid.smoothing_ratio);  // H / spacing
+    writeAttribute(root, "pressure_gradient",
+                   std::string(fluid.pressure_gradient == PressureGradient::Symmetric
+                                   ? "symmetric"
+                                   : "consistent"));                    // WCSPH's pressure force
     writeAttribute(root, "frame_rate", scene.frame_rate);               // 1/s
     writeAttribute(root, "gravity", sim.settings().gravity.data(), 3);  // m/s^2
 

@@ -305,6 +305,15 @@ int wholeNumber(const ObjectReader& object, const char* key, int fallback, const
 void readSolver(const ObjectReader& fluid, SimulationSettings& sim) {
   const std::string solver = fluid.choice("solver", "wcsph", {"wcsph", "dfsph"});
   sim.solver = solver == "dfsph" ? FluidSolver::Dfsph : FluidSolver::Wcsph;
+  if (fluid.find("pressure_gradient") && sim.solver != FluidSolver::Wcsph)
+    fluid.at("pressure_gradient")
+        .fail(
+            "is only used with \"solver\": \"wcsph\" (the divergence-free solver makes its "
+            "own pressure force; see fluid.dfsph.gradient_correction)");
+  sim.fluid.pressure_gradient =
+      fluid.choice("pressure_gradient", "consistent", {"consistent", "symmetric"}) == "symmetric"
+          ? PressureGradient::Symmetric
+          : PressureGradient::Consistent;
   const std::optional<ObjectReader> dfsph = fluid.optionalObject("dfsph");
   if (!dfsph) return;
   if (sim.solver != FluidSolver::Dfsph)
@@ -329,7 +338,8 @@ void readSolver(const ObjectReader& fluid, SimulationSettings& sim) {
 
 void readFluid(const ObjectReader& fluid, SimulationSettings& sim) {
   fluid.allowOnly({"particle_radius", "rest_density", "speed_of_sound", "viscosity",
-                   "kinematic_viscosity", "smoothing_ratio", "solver", "dfsph", "blocks"});
+                   "kinematic_viscosity", "smoothing_ratio", "solver", "pressure_gradient", "dfsph",
+                   "blocks"});
   FluidParams& p = sim.fluid;
   p.particle_radius = fluid.number("particle_radius", kPositive);
   const FluidParams defaults = kDefaults.fluid;

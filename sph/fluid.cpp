@@ -4,6 +4,8 @@
 
 #include <omp.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -375,6 +377,119 @@ void Fluid::computePressure() {
     state_.pressure[i] = params_.pressure(state_.density[i]);
     inv_rho_[i] = 1.0 / state_.density[i];
   }
+  if (params_.pressure_gradient != PressureGradient::Consistent) {
+    wall_sums_ = WallPressureSums{};
+    return;
+  }
+  const std::size_t un = state_.size();
+  wall_sums_.difference.assign(un, Vec3::Zero());
+  wall_sums_.moment.assign(un, std::array<double, 6>{});
+  wall_sums_.spread.assign(un, Vec3::Zero());
+  wall_sums_.symmetric.assign(un, Vec3::Zero());
+  surface_.clear();
+  if (neighbors_.size() != un) {  // no lists yet: each particle's own pressure
+    wall_sums_.reference = state_.pressure;
+    return;
+  }
+  raiseSurfacePressure();
+  // The lowest pressure of each particle and its neighbours: a symmetric pair loop as the
+  // others (each pair once, both sides; a minimum does not depend on the order).
+  wall_sums_.reference = state_.pressure;
+  const double* p = state_.pressure.data();
+  double* low = wall_sums_.reference.data();
+  forEachRange(neighbors_, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
+    const std::uint32_t end = static_cast<std::uint32_t>(i1);
+    forEachListOfRange(
+        neighbors_, r, i0, i1,
+        [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e, bool later) {
+          double m = low[i];
+          for (std::uint64_t q = k; q < e; ++q) {
+            const std::uint32_t j = nb[q];
+            m = std::min(m, p[j]);
+            if (later && j < end) low[j] = std::min(low[j], p[i]);
+          }
+          low[i] = m;
+        });
+  });
+}
+
+void Fluid::raiseSurfacePressure() {
+  const std::size_t n = state_.size();
+  surface_.assign(n, 0);
+  const Vec3* x = state_.position.data();
+  const double* inv_rho = inv_rho_.data();
+  const double support = kernel_.supportRadius();
+  const double r = params_.particle_radius;
+  // The colour gradient sum_b V_b grad W_ab over the fluid's neighbours (it points into
+  // the fluid at a free surface; the walls' samples are left out, so it points away from
+  // a wall too, but there the walls' share fills the density up).
+  colour_.assign(n, Vec3::Zero());
+  Vec3* colour = colour_.data();
+  forEachRange(neighbors_, [&](std::int64_t i0, std::int64_t i1, std::size_t rg) {
+    const std::uint32_t end = static_cast<std::uint32_t>(i1);
+    forEachListOfRange(
+        neighbors_, rg, i0, i1,
+        [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e, bool later) {
+          Vec3 sum = colour[i];
+          for (std::uint64_t q = k; q < e; ++q) {
+            const std::uint32_t j = nb[q];
+            const Vec3 d = x[i] - x[j];
+            const double dist = d.norm();
+            if (dist >= support) continue;
+            const Vec3 g = kernel_.derivativeOverR(dist) * d;  // grad_a W_ab
+            sum += (mass_ * inv_rho[j]) * g;
+            if (later && j < end) colour[j] -= (mass_ * inv_rho[i]) * g;
+          }
+          colour[i] = sum;
+        });
+  });
+  std::size_t surface_count = 0;
+  const double h = kernel_.smoothingLength();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (state_.density[i] < kSurfaceDensity * params_.rest_density &&
+        colour_[i].norm() * h > kSurfaceColour) {
+      surface_[i] = 1;
+      colour_[i] = -colour_[i].normalized();  // the outward normal from here on
+      ++surface_count;
+    }
+  }
+  if (surface_count == 0) return;
+  // sum_b W_ab P_b r / (r + d_b) and sum_b W_ab over the surface particles' neighbours
+  // below them that are not at the surface.
+  surface_sums_.assign(2 * n, 0.0);
+  double* sums = surface_sums_.data();
+  const std::uint8_t* surface = surface_.data();
+  const double* p = state_.pressure.data();
+  auto add = [&](std::size_t a, std::size_t b, const Vec3& d_ab, double w) {
+    const double depth = d_ab.dot(colour[a]);
+    if (depth < 0.5 * r) return;
+    sums[2 * a] += w * p[b] * r / (r + depth);
+    sums[2 * a + 1] += w;
+  };
+  forEachRange(neighbors_, [&](std::int64_t i0, std::int64_t i1, std::size_t rg) {
+    const std::uint32_t end = static_cast<std::uint32_t>(i1);
+    forEachListOfRange(
+        neighbors_, rg, i0, i1,
+        [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e, bool later) {
+          for (std::uint64_t q = k; q < e; ++q) {
+            const std::uint32_t j = nb[q];
+            const bool own = surface[i] && !surface[j];
+            const bool other = later && j < end && surface[j] && !surface[i];
+            if (!own && !other) continue;
+            const Vec3 d = x[i] - x[j];
+            const double dist = d.norm();
+            if (dist >= support) continue;
+            const double w = kernel_.value(dist);
+            if (own) add(i, j, d, w);
+            if (other) add(j, i, -d, w);
+          }
+        });
+  });
+  const std::int64_t sn = static_cast<std::int64_t>(n);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < sn; ++i)
+    if (surface[i] && sums[2 * i + 1] > 0.0)
+      state_.pressure[i] = std::max(state_.pressure[i], sums[2 * i] / sums[2 * i + 1]);
 }
 
 void Fluid::computeWithoutPressure() {
@@ -549,6 +664,14 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
   in.inv_rho = inv_rho_.data();
   in.nu = nu;
   in.p = pressure_term_ ? state_.pressure.data() : nullptr;
+  const bool consistent =
+      pressure_term_ && params_.pressure_gradient == PressureGradient::Consistent;
+  if (consistent) {
+    // The pressure term of its own (consistentPressureAccelerations) joins `extra`; the
+    // pair loop keeps the viscosities.
+    consistentPressureAccelerations(extra);
+    in.p = nullptr;
+  }
   in.neighbors = &neighbors_;
   in.kernel = &kernel_;
   in.eps_sq = 0.01 * h * h;
@@ -557,10 +680,11 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
   in.m = mass_;
   in.gravity = gravity;
   in.add = extra.empty() ? nullptr : extra.data();  // before the resize: extra may be it
-  state_.acceleration.resize(state_.size());
-  in.out = state_.acceleration.data();
   if (in.add && extra.size() != state_.size())
     throw std::invalid_argument("computeAccelerations: extra is not one per particle");
+  if (consistent) in.add = pressure_acceleration_.data();
+  state_.acceleration.resize(state_.size());
+  in.out = state_.acceleration.data();
   auto range = uniform ? accelerationRange2<true> : accelerationRange2<false>;
 #if defined(WAKE_HAS_LANES4)
   if (wide_lanes_) range = uniform ? accelerationRange4<true> : accelerationRange4<false>;
@@ -572,6 +696,129 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
     throw std::invalid_argument("computeAccelerations: derivatives of other pair lists");
   forEachRange(neighbors_,
                [&](std::int64_t i0, std::int64_t i1, std::size_t r) { range(i0, i1, r, in); });
+}
+
+namespace {
+
+/// The smallest eigenvalue of a symmetric 3x3 matrix (Eigen's closed form).
+double smallestEigenvalue(const Eigen::Matrix3d& m) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+  solver.computeDirect(m, Eigen::EigenvaluesOnly);
+  return solver.eigenvalues()(0);
+}
+
+}  // namespace
+
+void Fluid::consistentPressureAccelerations(const std::vector<Vec3>& extra) {
+  const std::size_t n = state_.size();
+  if (!extra.empty() && extra.size() != n)
+    throw std::invalid_argument("computeAccelerations: extra is not one per particle");
+  const WallPressureSums& walls = wall_sums_;
+  if (walls.difference.size() != n || walls.moment.size() != n || walls.spread.size() != n ||
+      walls.symmetric.size() != n || walls.reference.size() != n)
+    throw std::logic_error(
+        "Fluid::computeAccelerations: the walls' pressure sums are not this step's");
+  // Per particle: G (3), B (6: xx yy zz xy xz yz), E (3), and the symmetric form's sum
+  // S = sum_b m_b (P_a / rho_a^2 + P_b / rho_b^2) grad W_ab (3) for the spray.
+  constexpr std::size_t kSums = 15;
+  gradient_sums_.assign(kSums * n, 0.0);
+
+  double* sums = gradient_sums_.data();
+  const Vec3* x = state_.position.data();
+  const double* inv_rho = inv_rho_.data();
+  const double* p = state_.pressure.data();
+  const double support = kernel_.supportRadius();
+  const double m = mass_;
+  // A pair's terms: grad_a W_ab = w' x_ab (w' = W'(r) / r), and
+  //   G_a += V_b (P_b - P_a) w' x_ab,   G_b += V_a (P_b - P_a) w' x_ab,
+  //   B_a += -V_b w' x_ab x_ab^T,       B_b += -V_a w' x_ab x_ab^T,
+  //   E_a += m (1/rho_a^2 + 1/rho_b^2) w' x_ab,  E_b -= the same.
+  auto add = [](double* to, double v, double dp, double mw, const Vec3& d, double e, double sym) {
+    const double g = v * dp, b = -v * mw;
+    to[0] += g * d.x();
+    to[1] += g * d.y();
+    to[2] += g * d.z();
+    to[3] += b * d.x() * d.x();
+    to[4] += b * d.y() * d.y();
+    to[5] += b * d.z() * d.z();
+    to[6] += b * d.x() * d.y();
+    to[7] += b * d.x() * d.z();
+    to[8] += b * d.y() * d.z();
+    to[9] += e * d.x();
+    to[10] += e * d.y();
+    to[11] += e * d.z();
+    to[12] += sym * d.x();
+    to[13] += sym * d.y();
+    to[14] += sym * d.z();
+  };
+  forEachRange(neighbors_, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
+    const std::uint32_t end = static_cast<std::uint32_t>(i1);
+    forEachListOfRange(
+        neighbors_, r, i0, i1,
+        [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e, bool later) {
+          double* own = sums + kSums * i;
+          const double ri2 = inv_rho[i] * inv_rho[i];
+          const double pr2 = p[i] * ri2;
+          for (std::uint64_t q = k; q < e; ++q) {
+            const std::uint32_t j = nb[q];
+            const Vec3 d = x[i] - x[j];
+            const double dist = d.norm();
+            if (dist >= support || dist == 0.0) continue;
+            const double w = kernel_.derivativeOverR(dist);
+            const double dp = (p[j] - p[i]) * w;
+            const double rj2 = inv_rho[j] * inv_rho[j];
+            const double ew = m * (ri2 + rj2) * w;
+            const double sym = m * (pr2 + p[j] * rj2) * w;
+            add(own, m * inv_rho[j], dp, w, d, ew, sym);
+            if (later && j < end) add(sums + kSums * j, m * inv_rho[i], dp, w, d, -ew, -sym);
+          }
+        });
+  });
+  pressure_acceleration_.resize(n);
+  const std::int64_t sn = static_cast<std::int64_t>(n);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < sn; ++i) {
+    const double* s = sums + kSums * i;
+    const Vec3 own = extra.empty() ? Vec3::Zero() : extra[i];
+    Eigen::Matrix3d b;
+    b(0, 0) = s[3];
+    b(1, 1) = s[4];
+    b(2, 2) = s[5];
+    b(0, 1) = b(1, 0) = s[6];
+    b(0, 2) = b(2, 0) = s[7];
+    b(1, 2) = b(2, 1) = s[8];
+    // Spray, a sheet or a film one particle thick: the fluid's own neighbours do not
+    // surround it in some direction, and the corrected gradient, whose walls' samples
+    // stand at the fluid's pressure, would not push it off what it meets. The symmetric
+    // form, walls' included, does, as the pressure integral pushes the body. Between the
+    // two by the moment's smallest eigenvalue, so that the force is continuous in the
+    // particles' arrangement.
+    const double w_spray = std::clamp(
+        (smallestEigenvalue(b) - kSprayMoment[0]) / (kSprayMoment[1] - kSprayMoment[0]), 0.0, 1.0);
+    const Vec3 symmetric = own - Vec3(s[12], s[13], s[14]) + walls.symmetric[i];
+    if (w_spray == 0.0) {
+      pressure_acceleration_[i] = symmetric;
+      continue;
+    }
+    const std::array<double, 6>& bw = walls.moment[i];
+    b(0, 0) += bw[0];
+    b(1, 1) += bw[1];
+    b(2, 2) += bw[2];
+    b(0, 1) = b(1, 0) = s[6] + bw[3];
+    b(0, 2) = b(2, 0) = s[7] + bw[4];
+    b(1, 2) = b(2, 1) = s[8] + bw[5];
+    const Vec3 g = Vec3(s[0], s[1], s[2]) + walls.difference[i];
+    const Vec3 spread = Vec3(s[9], s[10], s[11]) + walls.spread[i];
+    const double det = b.determinant();
+    // Nearly singular (few neighbours): the sum uncorrected, between the two by det B.
+    const double w_det = std::clamp(
+        (det - kMomentDeterminant[0]) / (kMomentDeterminant[1] - kMomentDeterminant[0]), 0.0, 1.0);
+    const Vec3 grad_p = w_det > 0.0 ? Vec3(w_det * (b.inverse() * g) + (1.0 - w_det) * g) : g;
+    const Vec3 consistent =
+        own - inv_rho[i] * grad_p - kRepulsion * (p[i] - walls.reference[i]) * spread;
+    pressure_acceleration_[i] =
+        w_spray == 1.0 ? consistent : w_spray * consistent + (1.0 - w_spray) * symmetric;
+  }
 }
 
 double Fluid::maxSpeed() const {

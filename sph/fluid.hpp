@@ -10,11 +10,29 @@
 #include "sph/types.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <vector>
 
 namespace wake {
+
+/// How the weakly compressible fluid's pressure force is discretised (docs/forces.md, "The
+/// pressure force").
+enum class PressureGradient {
+  /// The default: the corrected difference form B_a^-1 sum_b V_b (P_b - P_a) grad W_ab
+  /// (exact for a linear pressure, walls' samples included), a repulsion of the size of
+  /// the pressure's variation over one support, and the free surface's pressure taken to
+  /// vanish r beyond the top particles. Bodies feel Archimedes' force and slow flows past
+  /// them are not held back; linear momentum is conserved only to the discretisation's
+  /// error.
+  Consistent,
+  /// The usual symmetric form sum_b m_b (P_a / rho_a^2 + P_b / rho_b^2) grad W_ab: conserves
+  /// linear momentum exactly, but its zero-order error times the pressure's level makes
+  /// the fluid a soft solid under a few centimetres of head (a body a little denser than
+  /// the fluid stops sinking) and reads the free surface about r low.
+  Symmetric,
+};
 
 /// Constant parameters of the fluid.
 struct FluidParams {
@@ -27,6 +45,9 @@ struct FluidParams {
   double kinematic_viscosity = 1e-6;
   double gamma = 7.0;            ///< Tait exponent, > 0
   double smoothing_ratio = 1.0;  ///< smoothing length H / spacing, in [0.8, 2]
+  /// The pressure force's form (computePressure, computeAccelerations; a pressure solver,
+  /// DivergenceFreeSolver, makes its own and ignores it).
+  PressureGradient pressure_gradient = PressureGradient::Consistent;
 
   double spacing() const { return 2.0 * particle_radius; }
   /// Tait's equation of state, clamped at zero (no tensile pull at free surfaces):
@@ -119,6 +140,27 @@ struct PairDerivatives {
   std::vector<std::vector<double>> later, before;  ///< (ranges)
 };
 
+/// What the walls add to the consistent pressure gradient of each fluid particle a
+/// (PressureGradient::Consistent): sums over the wall samples k within its support, with
+/// V_k the sample's volume, P_k its pressure and rho_k the density Tait's equation gives
+/// for it. Fluid::computePressure sizes and clears it and sets the reference; the
+/// boundaries add to it (Boundaries::addWallPressure); computeAccelerations reads it.
+/// Scratch of the step.
+struct WallPressureSums {
+  std::vector<Vec3> difference;  ///< (n) sum_k V_k (P_k - P_a) grad W_ak (Pa / m)
+  /// (n) sum_k V_k grad W_ak (x_k - x_a)^T, symmetric: xx, yy, zz, xy, xz, yz
+  std::vector<std::array<double, 6>> moment;
+  /// (n) sum_k rho0 V_k (1 / rho_a^2 + 1 / rho_k^2) grad W_ak (m^4 / kg): the walls' share
+  /// of the symmetric form's zero-order error E_a
+  std::vector<Vec3> spread;
+  /// (n) -sum_k rho0 V_k (P_a / rho_a^2 + P_k / rho_k^2) grad W_ak (m/s^2): the symmetric
+  /// form's walls' term, which the spray takes (Fluid::computeAccelerations)
+  std::vector<Vec3> symmetric;
+  /// (n) Pa: the pressure reference R_a, the lowest pressure of the particle, its
+  /// neighbours and the samples within its support (the walls lower it to theirs)
+  std::vector<double> reference;
+};
+
 /// The fluid solver: its parameters (the model), the neighbour grid and scratch space, and
 /// the state it steps. The state is the caller's (`state`: Simulation keeps it with the
 /// rest of a run's data, coupling/simulation.hpp) or, without one, the solver's own.
@@ -198,8 +240,25 @@ class Fluid {
   static std::uint64_t idDigest(const std::vector<std::uint32_t>& id);
   /// Summation density over fluid neighbours (no boundary share; the coupling adds it).
   void computeFluidDensity();
-  /// Tait pressure from density, clamped at zero (no tensile pull at free surfaces).
+  /// Tait pressure from density, clamped at zero (no tensile pull at free surfaces). With
+  /// PressureGradient::Consistent also: a free-surface particle's pressure raised to the
+  /// one that vanishes r beyond it (see raiseSurfacePressure), the pressure references, and
+  /// the walls' sums cleared (wallPressureSums).
   void computePressure();
+  /// PressureGradient::Consistent's constants (computeAccelerations, raiseSurfacePressure;
+  /// docs/forces.md has the measurements that chose them).
+  static constexpr double kRepulsion = 0.3;
+  /// det B_a below [0]: G_a uncorrected; above [1]: B_a^-1 G_a; linear between.
+  static constexpr double kMomentDeterminant[2] = {0.2, 0.4};
+  /// The fluid's own B_a's smallest eigenvalue below [0]: the symmetric form (spray);
+  /// above [1]: the consistent form; linear between.
+  static constexpr double kSprayMoment[2] = {0.1, 0.3};
+  static constexpr double kSurfaceDensity = 0.99;
+  static constexpr double kSurfaceColour = 0.2;
+  /// The walls' share of this step's consistent pressure gradient (sized and cleared by
+  /// computePressure with PressureGradient::Consistent, empty otherwise).
+  WallPressureSums& wallPressureSums() { return wall_sums_; }
+  const WallPressureSums& wallPressureSums() const { return wall_sums_; }
   /// What computeAccelerations needs of the densities when a pressure solver
   /// (DivergenceFreeSolver) makes the pressure force instead: 1 / rho, and no pressure term
   /// in the accelerations. The state's pressure is left as it is.
@@ -210,6 +269,25 @@ class Fluid {
   /// (each particle's entry is read before it is written): the walls' terms need no
   /// array of their own. The pressure term reads the state's pressure as it is
   /// (computePressure's; none after computeWithoutPressure) and the 1 / rho of either.
+  ///
+  /// The pressure term (FluidParams::pressure_gradient): PressureGradient::Symmetric is
+  ///   dv_a/dt -= sum_b m_b (P_a / rho_a^2 + P_b / rho_b^2) grad W_ab;
+  /// PressureGradient::Consistent is
+  ///   dv_a/dt -= B_a^-1 G_a / rho_a + s (P_a - R_a) E_a,
+  ///   G_a = sum_b V_b (P_b - P_a) grad W_ab,  B_a = sum_b V_b grad W_ab (x_b - x_a)^T,
+  ///   E_a = sum_b m_b (1 / rho_a^2 + 1 / rho_b^2) grad W_ab,  V_b = m_b / rho_b,
+  /// the sums over the fluid neighbours plus the walls' (wallPressureSums), R_a the
+  /// pressure reference and s = kRepulsion. B_a^-1 G_a is exact for a linear pressure;
+  /// where B_a is nearly singular (det B_a below kMomentDeterminant: a particle with few
+  /// neighbours) G_a is taken as it is. The second term is the symmetric form's zero-order
+  /// error for the pressure's variation over the neighbourhood only: it keeps the
+  /// particles from pairing up and clumping, with a stiffness that does not grow with the
+  /// depth. A particle whose fluid neighbours alone give a moment sum_b V_b grad W_ab
+  /// (x_b - x_a)^T with a small eigenvalue (kSprayMoment: spray, a sheet or a film one
+  /// particle thick, no neighbours on either side in some direction) takes the symmetric
+  /// form instead, walls' included, so that it is pushed off what it meets as the body is
+  /// pushed by the pressure (momentum is kept in impacts of thin sheets). Both switches
+  /// blend linearly, so the force is continuous in the particles' arrangement.
   ///
   /// Physical viscosity is Morris et al. (1997)'s SPH Laplacian, symmetric in a and b:
   ///   dv_a/dt += sum_b m_b (nu_a / rho_b + nu_b / rho_a) (x_ab . grad W_ab) / |x_ab|^2 v_ab,
@@ -271,12 +349,35 @@ class Fluid {
   std::uint64_t reference_ids_ = 0;   ///< idDigest of the ids at the last build
   std::vector<double> inv_rho_;       ///< (n) 1 / rho (m^3/kg), this step
   bool pressure_term_ = true;         ///< computePressure (true) or computeWithoutPressure
+  WallPressureSums wall_sums_;        ///< wallPressureSums()
+  /// PressureGradient::Consistent's scratch: the fluid's sums (12 n: G, B, E), the surface
+  /// test's colour gradients and flags, the surface pressure's sums (2 n), and the
+  /// pressure accelerations plus `extra` (n).
+  std::vector<double> gradient_sums_;
+  std::vector<Vec3> colour_;
+  std::vector<std::uint8_t> surface_;
+  std::vector<double> surface_sums_;
+  std::vector<Vec3> pressure_acceleration_;
   /// The step's scratch, in turn: the sort's order, cells and id gather (3 n uint32,
   /// updateNeighbors); the force loop's partial sums (6 n doubles); from predict() on, the
   /// step's start velocities and the predicted positions (2 n Vec3).
   StepScratch step_;
 
   bool wide_lanes_ = hasWideLanes();
+
+  /// PressureGradient::Consistent, after the equation of state: a particle at the free
+  /// surface (density < kSurfaceDensity rho0 and |sum_b V_b grad W_ab| H > kSurfaceColour)
+  /// gets at least the pressure that vanishes r beyond it along its outward normal n (minus
+  /// that sum's direction), extrapolated from the neighbours b at least r/2 below it
+  /// (depth d_b = (x_a - x_b) . n) that are not at the surface themselves:
+  ///   P_a = max(P_a, sum_b W_ab P_b r / (r + d_b) / sum_b W_ab).
+  /// Tait's pressure is zero there (density < rho0): without this the pressure would vanish
+  /// at the top particles' centres, r below the fluid's surface by volume, and a body would
+  /// feel the head of a column r lower than its own.
+  void raiseSurfacePressure();
+  /// PressureGradient::Consistent: the pressure term of every particle (see
+  /// computeAccelerations) plus `extra` (when not empty) into pressure_acceleration_.
+  void consistentPressureAccelerations(const std::vector<Vec3>& extra);
 
   /// Fits the grid to the bounds of the n points from `x` on for pairs within `radius`.
   void fitGrid(const Vec3* x, std::size_t n, double radius);

@@ -4,7 +4,10 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <array>
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 
 using namespace wake;
@@ -158,20 +161,24 @@ namespace {
 /// the walls' three passes (density share and shear, the samples' pressure, the walls'
 /// pressure force) of one step.
 struct WallPassScene {
-  static FluidParams viscous() {
+  static FluidParams viscous(PressureGradient form) {
     FluidParams p;
     p.particle_radius = 0.01;
     p.speed_of_sound = 20.0;
     p.kinematic_viscosity = 1e-3;
+    // The symmetric form's walls' term is a sum of its own (addWallPressure's `extra`),
+    // checked bit for bit by default; the consistent form's sums have a test of their own.
+    p.pressure_gradient = form;
     return p;
   }
-  FluidParams params = viscous();
+  FluidParams params;
   Aabb domain{Vec3(-0.1, -0.1, -0.1), Vec3(0.5, 0.4, 0.3)};
-  Boundaries walls{params, domain};
-  Fluid fluid{params, domain};
+  Boundaries walls;
+  Fluid fluid;
   BodyPlacement at;
 
-  explicit WallPassScene(bool moving) {
+  explicit WallPassScene(bool moving, PressureGradient form = PressureGradient::Symmetric)
+      : params(viscous(form)), walls(params, domain), fluid(params, domain) {
     BodySettings tank;
     tank.name = "tank";
     tank.shape = makeTank(Vec3::Zero(), Vec3(0.4, 0.3, 0.2), 0.04);
@@ -226,7 +233,7 @@ struct WallPassScene {
     fluid.computePressure();
     walls.computeSamplePressure(fluid, at, Vec3(0, -9.81, 0), pairs, r.samples);
     r.pressure_reaction.assign(walls.bodyCount(), Wrench{});
-    walls.addWallPressure(fluid, at, pairs, r.samples, r.pressure_force);
+    walls.addWallPressure(fluid, at, pairs, r.samples, r.pressure_force, fluid.wallPressureSums());
     walls.addBodyPressure(at, r.samples, r.pressure_reaction);
     return r;
   }
@@ -324,6 +331,67 @@ TEST(WallPasses, SeveralSamplesAtOnceGiveTheBitsOfOneSampleAtATime) {
       ASSERT_TRUE(sameBits(got.pressure_force[i], want)) << i;
     }
   }
+}
+
+TEST(WallPasses, TheConsistentFormsSumsAreTheSamplesTermsInTheWorld) {
+  // The walls' share of the consistent pressure gradient (static walls and a turning,
+  // moving box): each sum written out over every sample in world coordinates, against
+  // addWallPressure's (summed per set in the set's frame: to rounding).
+  WallPassScene scene(true, PressureGradient::Consistent);
+  const WallPassScene::Result got = scene.run();
+  const FluidState& st = scene.fluid.state();
+  const WallPressureSums& sums = scene.fluid.wallPressureSums();
+  ASSERT_EQ(sums.difference.size(), st.size());
+  for (const Vec3& a : got.pressure_force)
+    ASSERT_EQ(a, Vec3::Zero());  // `extra` untouched
+  std::vector<Vec3> pos, nrm;
+  std::vector<double> vol;
+  std::vector<std::uint32_t> body;
+  scene.walls.worldSamples(scene.at, pos, nrm, vol, body);
+  // The samples' pressures in worldSamples' order: the static set, then the box's.
+  std::vector<double> pk, pr2;
+  for (std::size_t s = 0; s < got.samples.pressure.size(); ++s) {
+    pk.insert(pk.end(), got.samples.pressure[s].begin(), got.samples.pressure[s].end());
+    pr2.insert(pr2.end(), got.samples.p_rho2[s].begin(), got.samples.p_rho2[s].end());
+  }
+  ASSERT_EQ(pk.size(), pos.size());
+  const CubicSplineKernel kernel(scene.params.smoothingLength());
+  const double rho0 = scene.params.rest_density;
+  std::size_t walled = 0;
+  for (std::size_t i = 0; i < st.size(); ++i) {
+    const double ra2 = 1.0 / (st.density[i] * st.density[i]);
+    Vec3 g = Vec3::Zero(), e = Vec3::Zero(), sym = Vec3::Zero();
+    Eigen::Matrix3d b = Eigen::Matrix3d::Zero();
+    double low = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < pos.size(); ++k) {
+      const Vec3 d = st.position[i] - pos[k];
+      const double r = d.norm();
+      if (r >= kernel.supportRadius()) continue;
+      const Vec3 grad = kernel.derivativeOverR(r) * d;
+      const double rk2 = pk[k] > 0 ? pr2[k] / pk[k] : 1.0 / (rho0 * rho0);
+      g += vol[k] * (pk[k] - st.pressure[i]) * grad;
+      b -= vol[k] * grad * d.transpose();
+      e += rho0 * vol[k] * (ra2 + rk2) * grad;
+      sym -= rho0 * vol[k] * (st.pressure[i] * ra2 + pr2[k]) * grad;
+      low = std::min(low, pk[k]);
+    }
+    if (!std::isfinite(low)) {
+      ASSERT_EQ(sums.difference[i], Vec3::Zero());
+      continue;
+    }
+    ++walled;
+    // G's terms are differences of pressures of up to a few hundred Pa: rounding of P_a.
+    const double scale_g = 1e-9 * (1.0 + g.norm() + 1e3 * st.pressure[i]);
+    EXPECT_LT((sums.difference[i] - g).norm(), scale_g) << i;
+    EXPECT_LT((sums.spread[i] - e).norm(), 1e-9 * (1.0 + e.norm())) << i;
+    EXPECT_LT((sums.symmetric[i] - sym).norm(), 1e-9 * (1.0 + sym.norm())) << i;
+    const std::array<double, 6>& m = sums.moment[i];
+    const Eigen::Matrix3d got_b =
+        (Eigen::Matrix3d() << m[0], m[3], m[4], m[3], m[1], m[5], m[4], m[5], m[2]).finished();
+    EXPECT_LT((got_b - b).norm(), 1e-9) << i;
+    EXPECT_LE(sums.reference[i], low) << i;
+  }
+  EXPECT_GT(walled, st.size() / 4);
 }
 
 TEST(WallPasses, TwoAndFourLanesGiveTheSameBitsWithAMovingBody) {

@@ -82,6 +82,7 @@ TEST(SceneLoader, SmallDambreak) {
   EXPECT_DOUBLE_EQ(s.sim.fluid.viscosity, 0.1);
   EXPECT_DOUBLE_EQ(s.sim.fluid.kinematic_viscosity, 1e-6);  // water
   EXPECT_DOUBLE_EQ(s.sim.fluid.smoothing_ratio, 1.0);
+  EXPECT_EQ(s.sim.fluid.pressure_gradient, PressureGradient::Consistent);
   ASSERT_EQ(s.sim.blocks.size(), 1u);
   EXPECT_DOUBLE_EQ(s.sim.blocks[0].kinematic_viscosity, 1e-6);  // the fluid's
   EXPECT_EQ(s.sim.blocks[0].min, Vec3(0, 0, 0));
@@ -117,6 +118,7 @@ const char* const kEveryShape = R"({
   "description": "every shape type and every kind of body",
   "time": { "end": 0.1 },
   "fluid": { "particle_radius": 0.01, "speed_of_sound": 20, "smoothing_ratio": 1.2,
+             "pressure_gradient": "symmetric",
              "blocks": [ { "min": [0.02, 0.02, 0.02], "max": [0.2, 0.2, 0.18] } ] },
   "coupling": { "method": "global" },
   "domain": { "min": [-0.1, -0.1, -0.1], "max": [0.6, 0.6, 0.3] },
@@ -164,6 +166,7 @@ TEST(SceneLoader, EveryShapeAndKindAndDefaults) {
   EXPECT_EQ(s.sim.gravity, Vec3(0, -9.81, 0));
   EXPECT_DOUBLE_EQ(s.sim.fluid.speed_of_sound, 20.0);
   EXPECT_DOUBLE_EQ(s.sim.fluid.smoothing_ratio, 1.2);
+  EXPECT_EQ(s.sim.fluid.pressure_gradient, PressureGradient::Symmetric);
   EXPECT_EQ(s.sim.method, CouplingMethod::Global);
   EXPECT_EQ(s.sim.domain.min, Vec3(-0.1, -0.1, -0.1));
   EXPECT_EQ(s.sim.domain.max, Vec3(0.6, 0.6, 0.3));
@@ -427,6 +430,14 @@ const BadCase kBadCases[] = {
      "coupling.method: ", "\"magic\""},
     {"unknown solver", [](json& s) { s["fluid"]["solver"] = "isph"; },
      "fluid.solver: ", "unknown value \"isph\""},
+    {"unknown pressure gradient", [](json& s) { s["fluid"]["pressure_gradient"] = "exact"; },
+     "fluid.pressure_gradient: ", "unknown value \"exact\""},
+    {"pressure gradient with dfsph",
+     [](json& s) {
+       s["fluid"]["solver"] = "dfsph";
+       s["fluid"]["pressure_gradient"] = "symmetric";
+     },
+     "fluid.pressure_gradient: ", "only used with \"solver\": \"wcsph\""},
     {"dfsph settings without dfsph",
      [](json& s) {
        s["fluid"]["dfsph"] = {{"max_iterations", 50}};
