@@ -793,8 +793,15 @@ void Fluid::consistentPressureAccelerations(const std::vector<Vec3>& extra) {
     // form, walls' included, does, as the pressure integral pushes the body. Between the
     // two by the moment's smallest eigenvalue, so that the force is continuous in the
     // particles' arrangement.
-    const double w_spray = std::clamp(
-        (smallestEigenvalue(b) - kSprayMoment[0]) / (kSprayMoment[1] - kSprayMoment[0]), 0.0, 1.0);
+    // Gershgorin's bound first: in the bulk (B near I) no eigenvalue needs solving for.
+    const double bound = std::min({b(0, 0) - std::abs(b(0, 1)) - std::abs(b(0, 2)),
+                                   b(1, 1) - std::abs(b(0, 1)) - std::abs(b(1, 2)),
+                                   b(2, 2) - std::abs(b(0, 2)) - std::abs(b(1, 2))});
+    const double w_spray = bound >= kSprayMoment[1]
+                               ? 1.0
+                               : std::clamp((smallestEigenvalue(b) - kSprayMoment[0]) /
+                                                (kSprayMoment[1] - kSprayMoment[0]),
+                                            0.0, 1.0);
     const Vec3 symmetric = own - Vec3(s[12], s[13], s[14]) + walls.symmetric[i];
     if (w_spray == 0.0) {
       pressure_acceleration_[i] = symmetric;
