@@ -297,6 +297,59 @@ bool Fluid::roundedWithinSkin(Vec3* rounded) const {
 
 namespace {
 
+/// The pair loop's sums per particle: acc (3), lap (3) and two unused (rows of 4).
+constexpr std::size_t kAccelerationSums = 8;
+/// The consistent pressure force's sums per particle: G (3), B (6: xx yy zz xy xz yz),
+/// E (3), S (3) and one unused, so that they load and store two at a time.
+constexpr std::size_t kGradientSums = 16;
+
+/// A group's per-pair terms (u: N sums, one vector per sum, a lane per neighbour) as
+/// rows: row[t][k] holds the sums [k W, k W + W) of neighbour t (W = the row's width; N a
+/// multiple of 4). A transpose per group instead of a shuffle per sum and neighbour.
+template <int N>
+inline void pairRows(const Lanes2* u, Lanes2 (*row)[N / 2]) {
+  for (int k = 0; k < N / 2; ++k)
+    transpose2(u[2 * k], u[2 * k + 1], row[0][k], row[1][k]);
+}
+#if defined(WAKE_HAS_LANES4)
+template <int N>
+WAKE_LANES4_FN void pairRows(const Lanes4* u, Lanes4 (*row)[N / 4]) {
+  for (int k = 0; k < N / 4; ++k) {
+    Lanes4 r[4];
+    transpose4(u[4 * k], u[4 * k + 1], u[4 * k + 2], u[4 * k + 3], r);
+    for (int t = 0; t < 4; ++t)
+      row[t][k] = r[t];
+  }
+}
+template <int N>
+WAKE_LANES4_FN void pairRows(const Lanes2* u, Lanes4 (*row)[N / 4]) {
+  for (int k = 0; k < N / 4; ++k) {
+    Lanes2 lo[2], hi[2];
+    transpose2(u[4 * k], u[4 * k + 1], lo[0], lo[1]);
+    transpose2(u[4 * k + 2], u[4 * k + 3], hi[0], hi[1]);
+    for (int t = 0; t < 2; ++t)
+      row[t][k] = join(lo[t], hi[t]);
+  }
+}
+#endif
+
+/// A group's N per-pair terms u (per sum, a lane per neighbour) taken from a's sums
+/// `own` one neighbour after the other (the list's order) and, where to[t] is not null,
+/// added to neighbour t's (N doubles at to[t]): the terms odd in x_ab.
+template <int N, class Acc, class M>
+inline void subtractPairTerms(const M* u, int used, Acc* own, double* const* to) {
+  constexpr int kW = Acc::kWidth;
+  Acc row[M::kWidth][N / kW];
+  pairRows<N>(u, row);
+  for (int t = 0; t < used; ++t) {
+    for (int k = 0; k < N / kW; ++k)
+      own[k] = own[k] - row[t][k];
+    if (to[t])
+      for (int k = 0; k < N / kW; ++k)
+        (Acc::load(to[t] + k * kW) + row[t][k]).store(to[t] + k * kW);
+  }
+}
+
 /// Summation density of the particles [i0, i1) (range r of the pair lists), several
 /// neighbours at a time (the kernel without branches). Each pair's kernel value is
 /// computed once, from its lower index, and added to both particles' sums; a pair with a
@@ -352,6 +405,65 @@ WAKE_TARGET_AVX void densityRange4(std::int64_t i0, std::int64_t i1, std::size_t
 }
 #endif
 
+/// The colour gradient sum_b V_b grad W_ab (V_b = m / rho_b) of the particles [i0, i1),
+/// into `colour` (4 per particle: x, y, z, unused; the partial sums), as densityRange:
+/// each pair once, from its lower index, its terms added to both sides in the order of
+/// each particle's list (a group's terms turned into rows: pairRows).
+template <class L>
+inline void colourRange(std::int64_t i0, std::int64_t i1, std::size_t r, const Vec3* x,
+                        const PairLists& pairs, const CubicSplineKernel& kernel, double mass,
+                        const double* inv_rho, double* colour) {
+  const std::uint32_t end = static_cast<std::uint32_t>(i1);
+  auto sums = [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e,
+                  bool both) {
+    constexpr int kBlocks = 4 / L::kWidth;
+    double* own = colour + 4 * i;
+    L sum[kBlocks];
+    for (int c = 0; c < kBlocks; ++c)
+      sum[c] = both ? L::load(own + c * L::kWidth) : L::all(0.0);
+    const L va = L::all(mass * inv_rho[i]);
+    forEachNeighborGroup<L>(nb, k, e, [&](auto lanes, const std::uint32_t* j, int used) {
+      using M = decltype(lanes);
+      const M zero = M::all(0.0);
+      const double* p[M::kWidth];
+      for (int t = 0; t < M::kWidth; ++t)
+        p[t] = x[j[t]].data();
+      M xj, yj, zj;
+      gather3Lanes(p, xj, yj, zj);
+      const M dx = M::all(x[i].x()) - xj, dy = M::all(x[i].y()) - yj, dz = M::all(x[i].z()) - zj;
+      const M dwr = kernel.derivativeOverR(sqrt(dx * dx + dy * dy + dz * dz));
+      const M grad[4] = {dwr * dx, dwr * dy, dwr * dz, zero};  // grad_a W_ab
+      L row[M::kWidth][kBlocks];
+      pairRows<4>(grad, row);
+      for (int t = 0; t < used; ++t) {
+        const L vb = L::all(mass * inv_rho[j[t]]);
+        for (int c = 0; c < kBlocks; ++c)
+          sum[c] = sum[c] + row[t][c] * vb;
+        if (!both || j[t] >= end) continue;
+        double* to = colour + 4 * std::size_t(j[t]);
+        for (int c = 0; c < kBlocks; ++c)
+          (L::load(to + c * L::kWidth) - row[t][c] * va).store(to + c * L::kWidth);
+      }
+    });
+    for (int c = 0; c < kBlocks; ++c)
+      sum[c].store(own + c * L::kWidth);
+  };
+  forEachListOfRange(pairs, r, i0, i1, sums);
+}
+
+void colourRange2(std::int64_t i0, std::int64_t i1, std::size_t r, const Vec3* x,
+                  const PairLists& pairs, const CubicSplineKernel& kernel, double mass,
+                  const double* inv_rho, double* colour) {
+  colourRange<Lanes2>(i0, i1, r, x, pairs, kernel, mass, inv_rho, colour);
+}
+#if defined(WAKE_HAS_LANES4)
+WAKE_TARGET_AVX void colourRange4(std::int64_t i0, std::int64_t i1, std::size_t r, const Vec3* x,
+                                  const PairLists& pairs, const CubicSplineKernel& kernel,
+                                  double mass, const double* inv_rho, double* colour) {
+  colourRange<Lanes4>(i0, i1, r, x, pairs, kernel, mass, inv_rho, colour);
+}
+#endif
+
 }  // namespace
 
 void Fluid::computeFluidDensity() {
@@ -397,19 +509,9 @@ void Fluid::computePressure() {
   wall_sums_.reference = state_.pressure;
   const double* p = state_.pressure.data();
   double* low = wall_sums_.reference.data();
-  forEachRange(neighbors_, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
-    const std::uint32_t end = static_cast<std::uint32_t>(i1);
-    forEachListOfRange(
-        neighbors_, r, i0, i1,
-        [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e, bool later) {
-          double m = low[i];
-          for (std::uint64_t q = k; q < e; ++q) {
-            const std::uint32_t j = nb[q];
-            m = std::min(m, p[j]);
-            if (later && j < end) low[j] = std::min(low[j], p[i]);
-          }
-          low[i] = m;
-        });
+  forEachPairOnce(neighbors_, [&](std::size_t i, std::uint32_t j, bool both) {
+    low[i] = std::min(low[i], p[j]);
+    if (both) low[j] = std::min(low[j], p[i]);
   });
 }
 
@@ -423,29 +525,23 @@ void Fluid::raiseSurfacePressure() {
   // The colour gradient sum_b V_b grad W_ab over the fluid's neighbours (it points into
   // the fluid at a free surface; the walls' samples are left out, so it points away from
   // a wall too, but there the walls' share fills the density up).
-  colour_.assign(n, Vec3::Zero());
-  Vec3* colour = colour_.data();
+  // Into the force loop's scratch for G, B, E, S (4 of its 16 per particle), free until
+  // computeAccelerations.
+  gradient_sums_.resize(kGradientSums * n);
+  double* colour_sums = gradient_sums_.data();
+  auto range = colourRange2;
+#if defined(WAKE_HAS_LANES4)
+  if (wide_lanes_) range = colourRange4;
+#endif
   forEachRange(neighbors_, [&](std::int64_t i0, std::int64_t i1, std::size_t rg) {
-    const std::uint32_t end = static_cast<std::uint32_t>(i1);
-    forEachListOfRange(
-        neighbors_, rg, i0, i1,
-        [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e, bool later) {
-          Vec3 sum = colour[i];
-          for (std::uint64_t q = k; q < e; ++q) {
-            const std::uint32_t j = nb[q];
-            const Vec3 d = x[i] - x[j];
-            const double dist = d.norm();
-            if (dist >= support) continue;
-            const Vec3 g = kernel_.derivativeOverR(dist) * d;  // grad_a W_ab
-            sum += (mass_ * inv_rho[j]) * g;
-            if (later && j < end) colour[j] -= (mass_ * inv_rho[i]) * g;
-          }
-          colour[i] = sum;
-        });
+    range(i0, i1, rg, x, neighbors_, kernel_, mass_, inv_rho, colour_sums);
   });
+  colour_.resize(n);
+  Vec3* colour = colour_.data();
   std::size_t surface_count = 0;
   const double h = kernel_.smoothingLength();
   for (std::size_t i = 0; i < n; ++i) {
+    colour_[i] = Vec3(colour_sums[4 * i], colour_sums[4 * i + 1], colour_sums[4 * i + 2]);
     if (state_.density[i] < kSurfaceDensity * params_.rest_density &&
         colour_[i].norm() * h > kSurfaceColour) {
       surface_[i] = 1;
@@ -466,24 +562,16 @@ void Fluid::raiseSurfacePressure() {
     sums[2 * a] += w * p[b] * r / (r + depth);
     sums[2 * a + 1] += w;
   };
-  forEachRange(neighbors_, [&](std::int64_t i0, std::int64_t i1, std::size_t rg) {
-    const std::uint32_t end = static_cast<std::uint32_t>(i1);
-    forEachListOfRange(
-        neighbors_, rg, i0, i1,
-        [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e, bool later) {
-          for (std::uint64_t q = k; q < e; ++q) {
-            const std::uint32_t j = nb[q];
-            const bool own = surface[i] && !surface[j];
-            const bool other = later && j < end && surface[j] && !surface[i];
-            if (!own && !other) continue;
-            const Vec3 d = x[i] - x[j];
-            const double dist = d.norm();
-            if (dist >= support) continue;
-            const double w = kernel_.value(dist);
-            if (own) add(i, j, d, w);
-            if (other) add(j, i, -d, w);
-          }
-        });
+  forEachPairOnce(neighbors_, [&](std::size_t i, std::uint32_t j, bool both) {
+    const bool own = surface[i] && !surface[j];
+    const bool other = both && surface[j] && !surface[i];
+    if (!own && !other) return;
+    const Vec3 d = x[i] - x[j];
+    const double dist = d.norm();
+    if (dist >= support) return;
+    const double w = kernel_.value(dist);
+    if (own) add(i, j, d, w);
+    if (other) add(j, i, -d, w);
   });
   const std::int64_t sn = static_cast<std::int64_t>(n);
 #pragma omp parallel for schedule(static)
@@ -514,8 +602,12 @@ struct AccelerationInputs {
   Vec3 gravity;
   const Vec3* add;  ///< (n) or null
   Vec3* out;
-  double* sums;                        ///< (6 n) scratch: partial sums
+  double* sums;                        ///< (kAccelerationSums n) scratch: partial sums
   const PairDerivatives* derivatives;  ///< each pair's W'(r) / r, or null: computed here
+  /// PressureGradient::Consistent: the pressure and its sums (kGradientSums per particle:
+  /// G, B, E, S of Fluid::computeAccelerations), or null.
+  const double* gradient_p = nullptr;
+  double* gradient_sums = nullptr;
 };
 
 /// The pair loop of Fluid::computeAccelerations for the particles [i0, i1) (one thread's
@@ -532,8 +624,38 @@ struct AccelerationInputs {
 ///   acc -= m (P_a / rho_a^2 + P_b / rho_b^2 + Pi_ab) W'(r) / r x_ab,
 ///   Pi_ab = -visc / (rho_a + rho_b) (v_ab . x_ab) / (r^2 + eps^2) where v_ab . x_ab < 0,
 ///   lap += mu_ab W'(r) / r v_ab.
-/// `sums` (6 per particle: acc, lap) holds the partial sums.
-template <class L, bool kUniformNu>
+/// `sums` (kAccelerationSums per particle: acc, lap) holds the partial sums, each group's
+/// terms turned into rows (pairRows) to be added neighbour by neighbour.
+///
+/// kConsistent: also each particle's sums of the consistent pressure force
+/// (Fluid::computeAccelerations), from the same W'(r) / r (w'), in the same order:
+///   G_a += V_b (P_b - P_a) w' x_ab,    G_b += V_a (P_b - P_a) w' x_ab,
+///   B_a += -V_b w' x_ab x_ab^T,        B_b += -V_a w' x_ab x_ab^T,
+///   E_a += m (1/rho_a^2 + 1/rho_b^2) w' x_ab,             E_b -= the same,
+///   S_a += m (P_a/rho_a^2 + P_b/rho_b^2) w' x_ab,          S_b -= the same,
+/// with V = m / rho; every term is the same bits from either side of its pair.
+/// Adds a group's terms of the consistent pressure force to a's sums `own` (one
+/// neighbour after the other: the list's order) and, where to[t] is not null, to
+/// neighbour t's sums. `mine`: a's terms (per sum, a lane per neighbour); `theirs`: the
+/// neighbours' G and B terms (the first 12 sums: E, S and the rest are a's negated).
+template <class Acc, class M>
+inline void addGradientTerms(const M* mine, const M* theirs, int used, Acc* own,
+                             double* const* to) {
+  constexpr int kW = Acc::kWidth, kBlocks = int(kGradientSums) / kW, kTheirs = 12 / kW;
+  Acc row[M::kWidth][kBlocks], their_row[M::kWidth][kTheirs];
+  pairRows<int(kGradientSums)>(mine, row);
+  pairRows<12>(theirs, their_row);
+  for (int t = 0; t < used; ++t) {
+    for (int k = 0; k < kBlocks; ++k)
+      own[k] = own[k] + row[t][k];
+    if (!to[t]) continue;
+    for (int k = 0; k < kBlocks; ++k)
+      (Acc::load(to[t] + k * kW) + (k < kTheirs ? their_row[t][k] : -row[t][k]))
+          .store(to[t] + k * kW);
+  }
+}
+
+template <class L, bool kUniformNu, bool kConsistent>
 inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
                               const AccelerationInputs& in) {
   const PairLists& pairs = *in.neighbors;
@@ -550,15 +672,24 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
     // The stored W'(r) / r of these pairs (at the lists' positions k ..), if any.
     const double* known = in.derivatives ? (both ? dwr_later : dwr_before) : nullptr;
     std::uint64_t at = k;  // the position of the group's first pair
-    double* own = sums + 6 * i;
+    double* own = sums + kAccelerationSums * i;
     const double pr2_i = p ? p[i] * in.inv_rho[i] * in.inv_rho[i] : 0.0;
-    Lanes2 acc_xy{}, acc_z_lap_x{}, lap_yz{};
-    if (both) {
-      acc_xy = Lanes2::load(own);
-      acc_z_lap_x = Lanes2::load(own + 2);
-      lap_yz = Lanes2::load(own + 4);
-    } else {
-      acc_xy = acc_z_lap_x = lap_yz = Lanes2::all(0.0);
+    // (acc.x, acc.y, acc.z, lap.x, lap.y, lap.z, unused, unused), L::kWidth to a register.
+    constexpr int kAccBlocks = int(kAccelerationSums) / L::kWidth;
+    L acc_lap[kAccBlocks];
+    for (int c = 0; c < kAccBlocks; ++c)
+      acc_lap[c] = both ? L::load(own + c * L::kWidth) : L::all(0.0);
+    // kConsistent: the sums G, B, E, S (kGradientSums), L::kWidth to a register.
+    double* own_g = kConsistent ? in.gradient_sums + kGradientSums * i : nullptr;
+    constexpr int kBlocks = int(kGradientSums) / L::kWidth;
+    L gs[kBlocks];
+    double ri2 = 0, gp_i = 0, gpr2_i = 0;
+    if constexpr (kConsistent) {
+      for (int c = 0; c < kBlocks; ++c)
+        gs[c] = both ? L::load(own_g + c * L::kWidth) : L::all(0.0);
+      ri2 = in.inv_rho[i] * in.inv_rho[i];
+      gp_i = in.gradient_p[i];
+      gpr2_i = gp_i * ri2;
     }
     forEachNeighborGroup<L>(nb, k, e, [&](auto lanes, const std::uint32_t* j, int used) {
       using M = decltype(lanes);
@@ -600,31 +731,48 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
                                     gatherLanes(zero, in.nu, j) * M::all(in.inv_rho[i]);
       const M g = mu * dwr;
       // lap += g v_ab, written as lap -= -(g v_ab) (the same bits).
-      const M ax = f * dx, ay = f * dy, az = f * dz;
-      const M lx = -(g * du), ly = -(g * dv), lz = -(g * dw);
-      acc_xy = subtractInOrder(acc_xy, ax, ay, used);
-      acc_z_lap_x = subtractInOrder(acc_z_lap_x, az, lx, used);
-      lap_yz = subtractInOrder(lap_yz, ly, lz, used);
-      if (!both) return;
+      const M terms[kAccelerationSums] = {f * dx,    f * dy,    f * dz, -(g * du),
+                                          -(g * dv), -(g * dw), zero,   zero};
       double* other[M::kWidth];
       for (int t = 0; t < M::kWidth; ++t)
-        other[t] = j[t] < end ? sums + 6 * std::size_t(j[t]) : nullptr;
-      addToPairs(other, ax, ay, used);
-      for (int t = 0; t < M::kWidth; ++t)
-        if (other[t]) other[t] += 2;
-      addToPairs(other, az, lx, used);
-      for (int t = 0; t < M::kWidth; ++t)
-        if (other[t]) other[t] += 2;
-      addToPairs(other, ly, lz, used);
+        other[t] = both && j[t] < end ? sums + kAccelerationSums * std::size_t(j[t]) : nullptr;
+      subtractPairTerms<int(kAccelerationSums)>(terms, used, acc_lap, other);
+      if constexpr (kConsistent) {
+        const M pj = gatherLanes(zero, in.gradient_p, j);
+        const M rj2 = inv_rho_j * inv_rho_j;
+        const M dp = (pj - M::all(gp_i)) * dwr;  // (P_b - P_a) w'
+        const M ew = M::all(in.m) * (M::all(ri2) + rj2) * dwr;
+        const M sym = M::all(in.m) * (M::all(gpr2_i) + pj * rj2) * dwr;
+        // G's and B's terms of each side, with the other side's volume V.
+        auto difference = [&](M volume, M* u) {
+          const M gv = volume * dp, b = -volume * dwr;
+          const M gb[9] = {gv * dx,     gv * dy,     gv * dz,     b * dx * dx, b * dy * dy,
+                           b * dz * dz, b * dx * dy, b * dx * dz, b * dy * dz};
+          std::copy(gb, gb + 9, u);
+        };
+        M mine[kGradientSums], theirs[12];
+        difference(M::all(in.m) * inv_rho_j, mine);
+        const M e_s[7] = {ew * dx, ew * dy, ew * dz, sym * dx, sym * dy, sym * dz, zero};
+        std::copy(e_s, e_s + 7, mine + 9);
+        difference(M::all(in.m * in.inv_rho[i]), theirs);
+        for (int c = 9; c < 12; ++c)
+          theirs[c] = -mine[c];
+        double* to[M::kWidth];
+        for (int t = 0; t < M::kWidth; ++t)
+          to[t] =
+              both && j[t] < end ? in.gradient_sums + kGradientSums * std::size_t(j[t]) : nullptr;
+        addGradientTerms(mine, theirs, used, gs, to);
+      }
     });
-    if (!both) {
-      acc_xy.store(own);
-      acc_z_lap_x.store(own + 2);
-      lap_yz.store(own + 4);
-      return;
+    if constexpr (kConsistent) {
+      for (int c = 0; c < kBlocks; ++c)
+        gs[c].store(own_g + c * L::kWidth);
     }
-    Vec3 acc(acc_xy.lane0(), acc_xy.lane1(), acc_z_lap_x.lane0());
-    const Vec3 lap(acc_z_lap_x.lane1(), lap_yz.lane0(), lap_yz.lane1());
+    for (int c = 0; c < kAccBlocks; ++c)
+      acc_lap[c].store(own + c * L::kWidth);
+    if (!both) return;
+    Vec3 acc(own[0], own[1], own[2]);
+    const Vec3 lap(own[3], own[4], own[5]);
     acc += in.m * lap + in.gravity;
     if (in.add) acc += in.add[i];
     in.out[i] = acc;
@@ -632,16 +780,16 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
   forEachListOfRange(pairs, r, i0, i1, add);
 }
 
-template <bool kUniformNu>
+template <bool kUniformNu, bool kConsistent>
 void accelerationRange2(std::int64_t i0, std::int64_t i1, std::size_t r,
                         const AccelerationInputs& in) {
-  accelerationRange<Lanes2, kUniformNu>(i0, i1, r, in);
+  accelerationRange<Lanes2, kUniformNu, kConsistent>(i0, i1, r, in);
 }
 #if defined(WAKE_HAS_LANES4)
-template <bool kUniformNu>
+template <bool kUniformNu, bool kConsistent>
 WAKE_TARGET_AVX void accelerationRange4(std::int64_t i0, std::int64_t i1, std::size_t r,
                                         const AccelerationInputs& in) {
-  accelerationRange<Lanes4, kUniformNu>(i0, i1, r, in);
+  accelerationRange<Lanes4, kUniformNu, kConsistent>(i0, i1, r, in);
 }
 #endif
 
@@ -651,7 +799,8 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
                                  const PairDerivatives* derivatives) {
   if (neighbors_.size() != state_.size())
     throw std::logic_error("Fluid::computeAccelerations before updateNeighbors");
-  const std::int64_t n = static_cast<std::int64_t>(state_.size());
+  const std::size_t un = state_.size();
+  const std::int64_t n = static_cast<std::int64_t>(un);
   const double* nu = state_.kinematic_viscosity.data();
   bool uniform = true;
   for (std::int64_t i = 1; i < n && uniform; ++i)
@@ -667,9 +816,16 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
   const bool consistent =
       pressure_term_ && params_.pressure_gradient == PressureGradient::Consistent;
   if (consistent) {
-    // The pressure term of its own (consistentPressureAccelerations) joins `extra`; the
-    // pair loop keeps the viscosities.
-    consistentPressureAccelerations(extra);
+    // The pair loop takes the consistent form's sums instead of the symmetric pressure
+    // term; addConsistentPressure turns them into the force after it.
+    const WallPressureSums& walls = wall_sums_;
+    if (walls.difference.size() != un || walls.moment.size() != un || walls.spread.size() != un ||
+        walls.symmetric.size() != un || walls.reference.size() != un)
+      throw std::logic_error(
+          "Fluid::computeAccelerations: the walls' pressure sums are not this step's");
+    gradient_sums_.resize(kGradientSums * un);
+    in.gradient_p = in.p;
+    in.gradient_sums = gradient_sums_.data();
     in.p = nullptr;
   }
   in.neighbors = &neighbors_;
@@ -680,22 +836,40 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
   in.m = mass_;
   in.gravity = gravity;
   in.add = extra.empty() ? nullptr : extra.data();  // before the resize: extra may be it
-  if (in.add && extra.size() != state_.size())
+  if (in.add && extra.size() != un)
     throw std::invalid_argument("computeAccelerations: extra is not one per particle");
-  if (consistent) in.add = pressure_acceleration_.data();
-  state_.acceleration.resize(state_.size());
+  // Consistent: `extra` joins the pressure term (addConsistentPressure), after the loop
+  // has written the accelerations (a copy if they are the same array).
+  std::vector<Vec3> extra_copy;
+  const Vec3* pressure_extra = nullptr;
+  if (consistent && in.add) {
+    if (extra.data() == state_.acceleration.data()) extra_copy = extra;
+    pressure_extra = extra_copy.empty() ? in.add : extra_copy.data();
+    in.add = nullptr;
+  }
+  state_.acceleration.resize(un);
   in.out = state_.acceleration.data();
-  auto range = uniform ? accelerationRange2<true> : accelerationRange2<false>;
+  using Range = void (*)(std::int64_t, std::int64_t, std::size_t, const AccelerationInputs&);
+  // [uniform][consistent]
+  Range range[2][2] = {{accelerationRange2<false, false>, accelerationRange2<false, true>},
+                       {accelerationRange2<true, false>, accelerationRange2<true, true>}};
 #if defined(WAKE_HAS_LANES4)
-  if (wide_lanes_) range = uniform ? accelerationRange4<true> : accelerationRange4<false>;
+  if (wide_lanes_) {
+    range[0][0] = accelerationRange4<false, false>;
+    range[0][1] = accelerationRange4<false, true>;
+    range[1][0] = accelerationRange4<true, false>;
+    range[1][1] = accelerationRange4<true, true>;
+  }
 #endif
-  in.sums = step_.view<double>(0, 6 * state_.size());
+  const Range loop = range[uniform][consistent];
+  in.sums = step_.view<double>(0, kAccelerationSums * un);
   in.derivatives = derivatives;
   if (derivatives && (derivatives->later.size() != neighbors_.ranges() ||
                       derivatives->before.size() != neighbors_.ranges()))
     throw std::invalid_argument("computeAccelerations: derivatives of other pair lists");
   forEachRange(neighbors_,
-               [&](std::int64_t i0, std::int64_t i1, std::size_t r) { range(i0, i1, r, in); });
+               [&](std::int64_t i0, std::int64_t i1, std::size_t r) { loop(i0, i1, r, in); });
+  if (consistent) addConsistentPressure(pressure_extra);
 }
 
 namespace {
@@ -709,77 +883,16 @@ double smallestEigenvalue(const Eigen::Matrix3d& m) {
 
 }  // namespace
 
-void Fluid::consistentPressureAccelerations(const std::vector<Vec3>& extra) {
-  const std::size_t n = state_.size();
-  if (!extra.empty() && extra.size() != n)
-    throw std::invalid_argument("computeAccelerations: extra is not one per particle");
+void Fluid::addConsistentPressure(const Vec3* extra) {
   const WallPressureSums& walls = wall_sums_;
-  if (walls.difference.size() != n || walls.moment.size() != n || walls.spread.size() != n ||
-      walls.symmetric.size() != n || walls.reference.size() != n)
-    throw std::logic_error(
-        "Fluid::computeAccelerations: the walls' pressure sums are not this step's");
-  // Per particle: G (3), B (6: xx yy zz xy xz yz), E (3), and the symmetric form's sum
-  // S = sum_b m_b (P_a / rho_a^2 + P_b / rho_b^2) grad W_ab (3) for the spray.
-  constexpr std::size_t kSums = 15;
-  gradient_sums_.assign(kSums * n, 0.0);
-
-  double* sums = gradient_sums_.data();
-  const Vec3* x = state_.position.data();
+  const double* sums = gradient_sums_.data();
   const double* inv_rho = inv_rho_.data();
   const double* p = state_.pressure.data();
-  const double support = kernel_.supportRadius();
-  const double m = mass_;
-  // A pair's terms: grad_a W_ab = w' x_ab (w' = W'(r) / r), and
-  //   G_a += V_b (P_b - P_a) w' x_ab,   G_b += V_a (P_b - P_a) w' x_ab,
-  //   B_a += -V_b w' x_ab x_ab^T,       B_b += -V_a w' x_ab x_ab^T,
-  //   E_a += m (1/rho_a^2 + 1/rho_b^2) w' x_ab,  E_b -= the same.
-  auto add = [](double* to, double v, double dp, double mw, const Vec3& d, double e, double sym) {
-    const double g = v * dp, b = -v * mw;
-    to[0] += g * d.x();
-    to[1] += g * d.y();
-    to[2] += g * d.z();
-    to[3] += b * d.x() * d.x();
-    to[4] += b * d.y() * d.y();
-    to[5] += b * d.z() * d.z();
-    to[6] += b * d.x() * d.y();
-    to[7] += b * d.x() * d.z();
-    to[8] += b * d.y() * d.z();
-    to[9] += e * d.x();
-    to[10] += e * d.y();
-    to[11] += e * d.z();
-    to[12] += sym * d.x();
-    to[13] += sym * d.y();
-    to[14] += sym * d.z();
-  };
-  forEachRange(neighbors_, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
-    const std::uint32_t end = static_cast<std::uint32_t>(i1);
-    forEachListOfRange(
-        neighbors_, r, i0, i1,
-        [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e, bool later) {
-          double* own = sums + kSums * i;
-          const double ri2 = inv_rho[i] * inv_rho[i];
-          const double pr2 = p[i] * ri2;
-          for (std::uint64_t q = k; q < e; ++q) {
-            const std::uint32_t j = nb[q];
-            const Vec3 d = x[i] - x[j];
-            const double dist = d.norm();
-            if (dist >= support || dist == 0.0) continue;
-            const double w = kernel_.derivativeOverR(dist);
-            const double dp = (p[j] - p[i]) * w;
-            const double rj2 = inv_rho[j] * inv_rho[j];
-            const double ew = m * (ri2 + rj2) * w;
-            const double sym = m * (pr2 + p[j] * rj2) * w;
-            add(own, m * inv_rho[j], dp, w, d, ew, sym);
-            if (later && j < end) add(sums + kSums * j, m * inv_rho[i], dp, w, d, -ew, -sym);
-          }
-        });
-  });
-  pressure_acceleration_.resize(n);
-  const std::int64_t sn = static_cast<std::int64_t>(n);
+  Vec3* out = state_.acceleration.data();
+  const std::int64_t n = static_cast<std::int64_t>(state_.size());
 #pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < sn; ++i) {
-    const double* s = sums + kSums * i;
-    const Vec3 own = extra.empty() ? Vec3::Zero() : extra[i];
+  for (std::int64_t i = 0; i < n; ++i) {
+    const double* s = sums + kGradientSums * i;
     Eigen::Matrix3d b;
     b(0, 0) = s[3];
     b(1, 1) = s[4];
@@ -802,9 +915,10 @@ void Fluid::consistentPressureAccelerations(const std::vector<Vec3>& extra) {
                                : std::clamp((smallestEigenvalue(b) - kSprayMoment[0]) /
                                                 (kSprayMoment[1] - kSprayMoment[0]),
                                             0.0, 1.0);
+    const Vec3 own = extra ? extra[i] : Vec3::Zero();
     const Vec3 symmetric = own - Vec3(s[12], s[13], s[14]) + walls.symmetric[i];
     if (w_spray == 0.0) {
-      pressure_acceleration_[i] = symmetric;
+      out[i] += symmetric;
       continue;
     }
     const std::array<double, 6>& bw = walls.moment[i];
@@ -823,8 +937,8 @@ void Fluid::consistentPressureAccelerations(const std::vector<Vec3>& extra) {
     const Vec3 grad_p = w_det > 0.0 ? Vec3(w_det * (b.inverse() * g) + (1.0 - w_det) * g) : g;
     const Vec3 consistent =
         own - inv_rho[i] * grad_p - kRepulsion * (p[i] - walls.reference[i]) * spread;
-    pressure_acceleration_[i] =
-        w_spray == 1.0 ? consistent : w_spray * consistent + (1.0 - w_spray) * symmetric;
+    out[i] +=
+        w_spray == 1.0 ? consistent : Vec3(w_spray * consistent + (1.0 - w_spray) * symmetric);
   }
 }
 

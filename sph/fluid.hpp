@@ -350,16 +350,15 @@ class Fluid {
   std::vector<double> inv_rho_;       ///< (n) 1 / rho (m^3/kg), this step
   bool pressure_term_ = true;         ///< computePressure (true) or computeWithoutPressure
   WallPressureSums wall_sums_;        ///< wallPressureSums()
-  /// PressureGradient::Consistent's scratch: the fluid's sums (12 n: G, B, E), the surface
-  /// test's colour gradients and flags, the surface pressure's sums (2 n), and the
-  /// pressure accelerations plus `extra` (n).
+  /// PressureGradient::Consistent's scratch: the fluid's sums (16 n: G, B, E, S, one
+  /// unused), the surface test's colour gradients and flags, the surface pressure's sums
+  /// (2 n).
   std::vector<double> gradient_sums_;
   std::vector<Vec3> colour_;
   std::vector<std::uint8_t> surface_;
   std::vector<double> surface_sums_;
-  std::vector<Vec3> pressure_acceleration_;
   /// The step's scratch, in turn: the sort's order, cells and id gather (3 n uint32,
-  /// updateNeighbors); the force loop's partial sums (6 n doubles); from predict() on, the
+  /// updateNeighbors); the force loop's partial sums (8 n doubles); from predict() on, the
   /// step's start velocities and the predicted positions (2 n Vec3).
   StepScratch step_;
 
@@ -375,9 +374,11 @@ class Fluid {
   /// at the top particles' centres, r below the fluid's surface by volume, and a body would
   /// feel the head of a column r lower than its own.
   void raiseSurfacePressure();
-  /// PressureGradient::Consistent: the pressure term of every particle (see
-  /// computeAccelerations) plus `extra` (when not empty) into pressure_acceleration_.
-  void consistentPressureAccelerations(const std::vector<Vec3>& extra);
+  /// PressureGradient::Consistent, after computeAccelerations' pair loop has left the
+  /// fluid's sums G, B, E, S in gradient_sums_: adds each particle's pressure term (see
+  /// computeAccelerations), with the walls' sums, plus extra[i] (when not null) to its
+  /// acceleration.
+  void addConsistentPressure(const Vec3* extra);
 
   /// Fits the grid to the bounds of the n points from `x` on for pairs within `radius`.
   void fitGrid(const Vec3* x, std::size_t n, double radius);

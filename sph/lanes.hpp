@@ -87,6 +87,11 @@ inline void addToOne(double* const* p, Lanes2 a, int used) {
   if (p[0]) *p[0] += a.lane0();
   if (used > 1 && p[1]) *p[1] += a.lane1();
 }
+/// The lanes as rows: lo = (a_0, b_0), hi = (a_1, b_1) (a 2x2 transpose).
+inline void transpose2(Lanes2 a, Lanes2 b, Lanes2& lo, Lanes2& hi) {
+  lo.v = _mm_unpacklo_pd(a.v, b.v);
+  hi.v = _mm_unpackhi_pd(a.v, b.v);
+}
 
 #else
 
@@ -162,6 +167,10 @@ inline void addToPairs(double* const* p, Lanes2 a, Lanes2 b, int used) {
 inline void addToOne(double* const* p, Lanes2 a, int used) {
   for (int t = 0; t < used; ++t)
     if (p[t]) *p[t] += a.v[t];
+}
+inline void transpose2(Lanes2 a, Lanes2 b, Lanes2& lo, Lanes2& hi) {
+  lo = {{a.v[0], b.v[0]}};
+  hi = {{a.v[1], b.v[1]}};
 }
 
 #endif
@@ -295,6 +304,20 @@ WAKE_LANES4_FN Lanes2 subtractInOrder(Lanes2 acc, Lanes4 a, Lanes4 b, int) {
   s = _mm_sub_pd(s, _mm_unpacklo_pd(a_hi, b_hi));
   s = _mm_sub_pd(s, _mm_unpackhi_pd(a_hi, b_hi));
   return {s};
+}
+
+/// The lanes as rows: row[t] = (a_t, b_t, c_t, d_t) (a 4x4 transpose).
+WAKE_LANES4_FN void transpose4(Lanes4 a, Lanes4 b, Lanes4 c, Lanes4 d, Lanes4* row) {
+  const __m256d ab_lo = _mm256_unpacklo_pd(a.v, b.v), ab_hi = _mm256_unpackhi_pd(a.v, b.v);
+  const __m256d cd_lo = _mm256_unpacklo_pd(c.v, d.v), cd_hi = _mm256_unpackhi_pd(c.v, d.v);
+  row[0].v = _mm256_permute2f128_pd(ab_lo, cd_lo, 0x20);
+  row[1].v = _mm256_permute2f128_pd(ab_hi, cd_hi, 0x20);
+  row[2].v = _mm256_permute2f128_pd(ab_lo, cd_lo, 0x31);
+  row[3].v = _mm256_permute2f128_pd(ab_hi, cd_hi, 0x31);
+}
+/// (lo_0, lo_1, hi_0, hi_1).
+WAKE_LANES4_FN Lanes4 join(Lanes2 lo, Lanes2 hi) {
+  return {_mm256_set_m128d(hi.v, lo.v)};
 }
 
 /// addToPairs and addToOne of four lanes (all four used).

@@ -45,4 +45,22 @@ inline void forEachListOfRange(const PairLists& pairs, std::size_t r, std::int64
     f(i, later, pairs.begin[i], pairs.begin[i] + pairs.count[i], true);
 }
 
+/// A scalar symmetric pair loop over all the lists: f(i, j, both) for each entry j of
+/// each point i's lists, in parallel over the ranges, in the order of forEachListOfRange.
+/// `both`: j lies later in i's own range, the pair comes up only here, and f does j's side
+/// too; otherwise j's side comes up in j's own call (from its earlier neighbours). Each
+/// point's terms are then taken in the order of its whole list on any number of threads.
+template <class F>
+void forEachPairOnce(const PairLists& pairs, F&& f) {
+  forEachRange(pairs, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
+    const std::uint32_t end = static_cast<std::uint32_t>(i1);
+    forEachListOfRange(
+        pairs, r, i0, i1,
+        [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e, bool later) {
+          for (std::uint64_t q = k; q < e; ++q)
+            f(static_cast<std::size_t>(i), nb[q], later && nb[q] < end);
+        });
+  });
+}
+
 }  // namespace wake
