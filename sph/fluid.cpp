@@ -666,7 +666,6 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
   const std::uint32_t end = static_cast<std::uint32_t>(i1);
   const double* dwr_later = in.derivatives ? in.derivatives->later[r].data() : nullptr;
   const double* dwr_before = in.derivatives ? in.derivatives->before[r].data() : nullptr;
-  // (acc.x, acc.y), (acc.z, lap.x), (lap.y, lap.z)
   auto add = [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e,
                  bool both) {
     // The stored W'(r) / r of these pairs (at the lists' positions k ..), if any.

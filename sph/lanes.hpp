@@ -74,15 +74,8 @@ inline Lanes2 subtractInOrder(Lanes2 acc, Lanes2 a, Lanes2 b, int used) {
   return {s};
 }
 
-/// For each lane t < used with a destination (p[t] not null): (p[t][0], p[t][1]) +=
-/// (a_t, b_t). The other side of a pair: its particle gets the term negated, and
-/// x - (-y) is x + y, bit for bit.
-inline void addToPairs(double* const* p, Lanes2 a, Lanes2 b, int used) {
-  if (p[0]) _mm_storeu_pd(p[0], _mm_add_pd(_mm_loadu_pd(p[0]), _mm_unpacklo_pd(a.v, b.v)));
-  if (used > 1 && p[1])
-    _mm_storeu_pd(p[1], _mm_add_pd(_mm_loadu_pd(p[1]), _mm_unpackhi_pd(a.v, b.v)));
-}
-/// For each lane t < used with a destination: *p[t] += a_t.
+/// For each lane t < used with a destination (p[t] not null): *p[t] += a_t. The other
+/// side of a pair: its particle gets the term negated, and x - (-y) is x + y, bit for bit.
 inline void addToOne(double* const* p, Lanes2 a, int used) {
   if (p[0]) *p[0] += a.lane0();
   if (used > 1 && p[1]) *p[1] += a.lane1();
@@ -157,13 +150,6 @@ inline Lanes2 subtractInOrder(Lanes2 acc, Lanes2 a, Lanes2 b, int used) {
   return acc;
 }
 
-inline void addToPairs(double* const* p, Lanes2 a, Lanes2 b, int used) {
-  for (int t = 0; t < used; ++t)
-    if (p[t]) {
-      p[t][0] += a.v[t];
-      p[t][1] += b.v[t];
-    }
-}
 inline void addToOne(double* const* p, Lanes2 a, int used) {
   for (int t = 0; t < used; ++t)
     if (p[t]) *p[t] += a.v[t];
@@ -320,15 +306,7 @@ WAKE_LANES4_FN Lanes4 join(Lanes2 lo, Lanes2 hi) {
   return {_mm256_set_m128d(hi.v, lo.v)};
 }
 
-/// addToPairs and addToOne of four lanes (all four used).
-WAKE_LANES4_FN void addToPairs(double* const* p, Lanes4 a, Lanes4 b, int) {
-  const __m128d a_lo = _mm256_castpd256_pd128(a.v), a_hi = _mm256_extractf128_pd(a.v, 1);
-  const __m128d b_lo = _mm256_castpd256_pd128(b.v), b_hi = _mm256_extractf128_pd(b.v, 1);
-  if (p[0]) _mm_storeu_pd(p[0], _mm_add_pd(_mm_loadu_pd(p[0]), _mm_unpacklo_pd(a_lo, b_lo)));
-  if (p[1]) _mm_storeu_pd(p[1], _mm_add_pd(_mm_loadu_pd(p[1]), _mm_unpackhi_pd(a_lo, b_lo)));
-  if (p[2]) _mm_storeu_pd(p[2], _mm_add_pd(_mm_loadu_pd(p[2]), _mm_unpacklo_pd(a_hi, b_hi)));
-  if (p[3]) _mm_storeu_pd(p[3], _mm_add_pd(_mm_loadu_pd(p[3]), _mm_unpackhi_pd(a_hi, b_hi)));
-}
+/// addToOne of four lanes (all four used).
 WAKE_LANES4_FN void addToOne(double* const* p, Lanes4 a, int) {
   alignas(32) double lane[4];
   _mm256_store_pd(lane, a.v);
