@@ -271,7 +271,7 @@ TEST_P(BuoyancySpacing, DraftErrorShrinksWithTheSpacing) {
 /// The lightest boxes, 0.25 and 0.3 the fluid's density, at three particle spacings of
 /// draft (r = draft / 6: 4.17 and 5 mm): dropped from 1 cm (2 s) and started at rest at
 /// their draft (1 s), local and global control; the draft within 3 % of Archimedes'.
-/// WCSPH: +0.1 to +0.6 % (slow: eight runs, 7.5 min on one thread). DFSPH floats these boxes
+/// WCSPH: -0.5 to +1.1 % (slow: eight runs, 10 min on two threads). DFSPH floats these boxes
 /// 2.6-5.2 % too high (docs/forces.md, "Floating and sinking boxes"): its cases are
 /// instantiated disabled, `--gtest_also_run_disabled_tests
 /// --gtest_filter='DISABLED_Ratios/LightDraft*'` runs them.
