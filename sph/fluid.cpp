@@ -303,6 +303,20 @@ constexpr std::size_t kAccelerationSums = 8;
 /// E (3), S (3) and one unused, so that they load and store two at a time.
 constexpr std::size_t kGradientSums = 16;
 
+/// x_a - x_b of point a = i and the group's neighbours j (a lane each).
+template <class M>
+inline void pairOffsets(const Vec3* x, std::int64_t i, const std::uint32_t* j, M& dx, M& dy,
+                        M& dz) {
+  const double* p[M::kWidth];
+  for (int t = 0; t < M::kWidth; ++t)
+    p[t] = x[j[t]].data();
+  M xj, yj, zj;
+  gather3Lanes(p, xj, yj, zj);
+  dx = M::all(x[i].x()) - xj;
+  dy = M::all(x[i].y()) - yj;
+  dz = M::all(x[i].z()) - zj;
+}
+
 /// A group's per-pair terms (u: N sums, one vector per sum, a lane per neighbour) as
 /// rows: row[t][k] holds the sums [k W, k W + W) of neighbour t (W = the row's width; N a
 /// multiple of 4). A transpose per group instead of a shuffle per sum and neighbour.
@@ -368,12 +382,8 @@ inline void densityRange(std::int64_t i0, std::int64_t i1, std::size_t r, const 
     Lanes2 sum = Lanes2::all(start);  // lane 0: the sum (lane 1 the same)
     forEachNeighborGroup<L>(nb, k, e, [&](auto lanes, const std::uint32_t* j, int used) {
       using M = decltype(lanes);
-      const double* p[M::kWidth];
-      for (int t = 0; t < M::kWidth; ++t)
-        p[t] = x[j[t]].data();
-      M xj, yj, zj;
-      gather3Lanes(p, xj, yj, zj);
-      const M dx = M::all(x[i].x()) - xj, dy = M::all(x[i].y()) - yj, dz = M::all(x[i].z()) - zj;
+      M dx, dy, dz;
+      pairOffsets(x, i, j, dx, dy, dz);
       const M w = kernel.value(sqrt(dx * dx + dy * dy + dz * dz));
       sum = subtractInOrder(sum, -w, -w, used);  // sum - (-w) is sum + w, bit for bit
       if (!both) return;
@@ -425,12 +435,8 @@ inline void colourRange(std::int64_t i0, std::int64_t i1, std::size_t r, const V
     forEachNeighborGroup<L>(nb, k, e, [&](auto lanes, const std::uint32_t* j, int used) {
       using M = decltype(lanes);
       const M zero = M::all(0.0);
-      const double* p[M::kWidth];
-      for (int t = 0; t < M::kWidth; ++t)
-        p[t] = x[j[t]].data();
-      M xj, yj, zj;
-      gather3Lanes(p, xj, yj, zj);
-      const M dx = M::all(x[i].x()) - xj, dy = M::all(x[i].y()) - yj, dz = M::all(x[i].z()) - zj;
+      M dx, dy, dz;
+      pairOffsets(x, i, j, dx, dy, dz);
       const M dwr = kernel.derivativeOverR(sqrt(dx * dx + dy * dy + dz * dz));
       const M grad[4] = {dwr * dx, dwr * dy, dwr * dz, zero};  // grad_a W_ab
       L row[M::kWidth][kBlocks];
