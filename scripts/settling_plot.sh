@@ -3,8 +3,11 @@
 # sphere named "sphere" in a tank): runs it and plots the sphere's sinking speed over time
 # beside the terminal speed of the standard drag law: Stokes' drag with the
 # Schiller-Naumann correction, C_D = 24/Re (1 + 0.15 Re^0.687), times the wall factor of
-# Di Felice (1996) for a sphere of diameter d in a container of width D,
-# ((1 - d/D) / (1 - 0.33 d/D))^((3.3 + 0.085 Re) / (1 + 0.1 Re)).
+# Di Felice (1996) for a sphere of diameter d in a tube of diameter D,
+# ((1 - d/D) / (1 - 0.33 d/D))^((3.3 + 0.085 Re) / (1 + 0.1 Re)); a tank of square
+# section (its narrower side W) counts as a tube of D = W 2.1044 / 1.903, the ratio of
+# the first-order Stokes wall coefficients of a tube and a square duct (Happel and
+# Brenner 1965), as the Settling test (tests/physics/test_coupled_bodies.cpp) does.
 #
 #   bash scripts/settling_plot.sh [SCENE] [--no-run | wake run options...]
 #
@@ -48,7 +51,7 @@ tank = next(b for b in scene["bodies"] if b["shape"]["type"] == "tank")["shape"]
 d = 2 * sphere["shape"]["radius"]
 rho_s = sphere["density"]
 width = min(tank["max"][0] - tank["min"][0], tank["max"][2] - tank["min"][2])
-lam = d / width
+lam = d / (width * 2.1044 / 1.903)
 stokes = (rho_s - rho_f) * g * d * d / (18 * rho_f * nu)
 u = stokes
 for _ in range(200):  # fixed point of the force balance
