@@ -379,6 +379,35 @@ double dragLaw(double v, double d, double width, double rho, double nu) {
   return 3 * M_PI * rho * nu * d * v * (1 + 0.15 * std::pow(re, 0.687)) / wall;
 }
 
+/// A square tank (`width`, 2 cm above the fluid) filled `depth` deep with a viscous fluid.
+struct ViscousTank {
+  double r;      ///< particle radius (m)
+  double rho;    ///< rest density (kg/m^3)
+  double nu;     ///< kinematic viscosity (m^2/s)
+  double alpha;  ///< Monaghan's artificial viscosity
+  double width, depth;
+};
+
+/// `tank` with a dynamic sphere ("ball", body 1) of `ratio` times the fluid's density at
+/// rest on the tank's axis at height `y`; WCSPH, local control.
+SceneWorld sphereInTank(const ViscousTank& tank_, double radius, double ratio, double y) {
+  SimulationSettings s;
+  s.fluid.particle_radius = tank_.r;
+  s.fluid.rest_density = tank_.rho;
+  s.fluid.kinematic_viscosity = tank_.nu;
+  s.fluid.viscosity = tank_.alpha;
+  s.method = CouplingMethod::Local;
+  s.blocks.push_back({Vec3::Zero(), Vec3(tank_.width, tank_.depth, tank_.width)});
+  BodySpec ball;
+  ball.name = "ball";
+  ball.kind = BodyKind::Dynamic;
+  ball.shape.type = "sphere";
+  ball.shape.radius = radius;
+  ball.density = ratio * tank_.rho;
+  ball.pose.position = Vec3(tank_.width / 2, y, tank_.width / 2);
+  return SceneWorld(s, {tank(Vec3(tank_.width, tank_.depth + 0.02, tank_.width)), ball});
+}
+
 struct NearNeutralCase {
   double ratio;  ///< the sphere's density over the fluid's
   double nu;     ///< the fluid's kinematic viscosity (m^2/s)
@@ -400,22 +429,8 @@ struct NearNeutralCase {
 /// least a quarter as far and as fast as the law says.
 void checkNearNeutral(const NearNeutralCase& c) {
   constexpr double r = 0.0015, radius = 0.0075, width = 0.06, depth = 0.12, rho = 1000.0;
-  SimulationSettings s;
-  s.fluid.particle_radius = r;
-  s.fluid.rest_density = rho;
-  s.fluid.kinematic_viscosity = c.nu;
-  s.fluid.viscosity = 0.02;
-  s.method = CouplingMethod::Local;
-  s.blocks.push_back({Vec3::Zero(), Vec3(width, depth, width)});
-  BodySpec ball;
-  ball.name = "ball";
-  ball.kind = BodyKind::Dynamic;
-  ball.shape.type = "sphere";
-  ball.shape.radius = radius;
-  ball.density = c.ratio * rho;
   const Vec3 start(width / 2, depth / 2, width / 2);
-  ball.pose.position = start;
-  SceneWorld world(s, {tank(Vec3(width, depth + 0.02, width)), ball});
+  SceneWorld world(sphereInTank({r, rho, c.nu, 0.02, width, depth}, radius, c.ratio, start.y()));
   // The law's motion, integrated alongside (Heun's rule, steps of 0.1 ms).
   const double d = 2 * radius, volume = M_PI * d * d * d / 6;
   const double mass = (c.ratio + 0.5) * rho * volume;
@@ -571,22 +586,8 @@ double settlingError(const SettlingCase& c) {
   const double depth = start_y + 0.025;
   law = SettlingLaw(c.ratio, d, tube, rho, c.nu);
 
-  SimulationSettings s;
-  s.fluid.particle_radius = c.r;
-  s.fluid.rest_density = rho;
-  s.fluid.kinematic_viscosity = c.nu;
-  s.fluid.viscosity = 0.0;
-  s.method = CouplingMethod::Local;
-  s.blocks.push_back({Vec3::Zero(), Vec3(width, depth, width)});
-  BodySpec ball;
-  ball.name = "ball";
-  ball.kind = BodyKind::Dynamic;
-  ball.shape.type = "sphere";
-  ball.shape.radius = radius;
-  ball.density = c.ratio * rho;
   const Vec3 start(width / 2, start_y, width / 2);
-  ball.pose.position = start;
-  SceneWorld world(s, {tank(Vec3(width, depth + 0.02, width)), ball});
+  SceneWorld world(sphereInTank({c.r, rho, c.nu, 0.0, width, depth}, radius, c.ratio, start_y));
   constexpr double kSample = 0.005;
   double t = 0.0, y = 0.0, y_from = 0.0, y_law_from = 0.0, t_from = -1.0;
   std::string trace;  // the speed every 0.05 s
