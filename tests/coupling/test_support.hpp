@@ -7,6 +7,8 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -39,6 +41,47 @@ inline BodySettings staticBody(const std::string& name, std::shared_ptr<const Sh
   b.restitution = restitution;
   return b;
 }
+
+/// A static tank (body 0) and one two-way body (body 1) held on a set velocity until
+/// `release` seconds (for good by default), then free to translate under `gravity` and the
+/// fluid's force with its own `mass` (semi-implicit Euler, as SimpleRigidBodies; no
+/// rotation: for a body on a symmetric tank's axis). While held it is two-way with a huge
+/// mass, so the control sees a free body and its wrench is computed as for one.
+class HeldBody final : public RigidBodies {
+ public:
+  static constexpr double kHeldMass = 1e6;
+  HeldBody(const RigidState& tank, const RigidState& body, const Vec3& inertia,
+           double release = std::numeric_limits<double>::infinity(), double mass = kHeldMass,
+           const Vec3& gravity = Vec3(0, -9.81, 0))
+      : states_{tank, body}, inertia_(inertia), release_(release), mass_(mass), gravity_(gravity) {}
+  std::size_t count() const override { return 2; }
+  RigidState state(std::size_t b) const override { return states_[b]; }
+  void predict(double dt, std::vector<RigidPrediction>& out) const override {
+    out.resize(2);
+    for (std::size_t b = 0; b < 2; ++b)
+      out[b].state = states_[b];
+    out[0].inverse_mass = 0.0;
+    out[0].inverse_inertia_world = Mat3::Zero();
+    out[1].inverse_mass = 1.0 / (held() ? kHeldMass : mass_);
+    out[1].inverse_inertia_world =
+        held() ? Mat3(inertia_.cwiseInverse().asDiagonal()) : Mat3::Zero();
+    if (!held()) out[1].state.linear_velocity += dt * gravity_;
+    out[1].state.pose.position += dt * out[1].state.linear_velocity;
+  }
+  void step(double dt, const std::vector<Wrench>& fluid) override {
+    if (!held()) states_[1].linear_velocity += dt * (gravity_ + fluid[1].force / mass_);
+    states_[1].pose.position += dt * states_[1].linear_velocity;
+    time_ += dt;
+  }
+  bool held() const { return time_ < release_ - 1e-12; }
+
+ private:
+  std::array<RigidState, 2> states_;
+  Vec3 inertia_;
+  double release_, mass_;
+  Vec3 gravity_;
+  double time_ = 0.0;
+};
 
 /// A tank (cavity [0, size]) with one fluid block.
 inline SimulationSettings tankScene(const Vec3& tank_size, const FluidBlock& block,

@@ -5,6 +5,7 @@
 // but held: its rigid side has a huge mass and moves it along a set velocity (zero here).
 // docs/forces.md has these figures for more shapes and spacings.
 #include "coupling/simulation.hpp"
+#include "coupling/test_support.hpp"
 #include "geometry/shape.hpp"
 
 #include <gtest/gtest.h>
@@ -15,35 +16,6 @@
 
 namespace wake {
 namespace {
-
-/// A static tank (body 0) and one two-way body (body 1) held on a set velocity.
-class HeldBody final : public RigidBodies {
- public:
-  HeldBody(const RigidState& tank, const RigidState& body, const Vec3& inertia)
-      : states_{tank, body}, inertia_(inertia) {}
-  std::size_t count() const override { return states_.size(); }
-  RigidState state(std::size_t b) const override { return states_[b]; }
-  void predict(double dt, std::vector<RigidPrediction>& out) const override {
-    out.resize(states_.size());
-    for (std::size_t b = 0; b < states_.size(); ++b) {
-      out[b].state = states_[b];
-      out[b].state.pose.position += dt * states_[b].linear_velocity;
-      // The body is two-way: a finite (huge) mass, so the control sees a free body.
-      out[b].inverse_mass = b == 1 ? 1.0 / kHeldMass : 0.0;
-      out[b].inverse_inertia_world =
-          b == 1 ? Mat3(inertia_.cwiseInverse().asDiagonal()) : Mat3::Zero();
-    }
-  }
-  void step(double dt, const std::vector<Wrench>&) override {
-    for (RigidState& s : states_)
-      s.pose.position += dt * s.linear_velocity;
-  }
-  static constexpr double kHeldMass = 1e6;
-
- private:
-  std::vector<RigidState> states_;
-  Vec3 inertia_;
-};
 
 struct HeldCase {
   const char* label;
@@ -80,12 +52,12 @@ HeldForce heldForce(const HeldCase& c, double end) {
   body.shape = c.sphere ? makeSphere(half) : makeBox(Vec3::Constant(half));
   const double volume = c.sphere ? 4.0 / 3.0 * M_PI * half * half * half : 8 * half * half * half;
   body.pose.position = Vec3(width / 2, c.on_floor ? half : height - 0.06, width / 2);
-  body.mass = HeldBody::kHeldMass;
-  body.inertia = Vec3::Constant(HeldBody::kHeldMass * half * half);
+  body.mass = test::HeldBody::kHeldMass;
+  body.inertia = Vec3::Constant(test::HeldBody::kHeldMass * half * half);
   s.bodies = {tank, body};
-  auto held =
-      std::make_unique<HeldBody>(RigidState{tank.pose, Vec3::Zero(), Vec3::Zero()},
-                                 RigidState{body.pose, Vec3::Zero(), Vec3::Zero()}, body.inertia);
+  auto held = std::make_unique<test::HeldBody>(RigidState{tank.pose, Vec3::Zero(), Vec3::Zero()},
+                                               RigidState{body.pose, Vec3::Zero(), Vec3::Zero()},
+                                               body.inertia);
   Simulation sim(s, std::move(held));
   const double archimedes = s.fluid.rest_density * 9.81 * volume;
   HeldForce f{0, 0, 0, 0, 0};

@@ -1,15 +1,21 @@
 // Two-way coupling with Bullet in the loop, through the scene path (SceneWorld): buoyancy
-// (Archimedes), viscous drag, body-body contact under water. Every test also asserts that
-// no fluid centre ever entered a body's exact shape (max_penetrating == 0).
+// (Archimedes), viscous drag, body-body contact under water; the settling spheres'
+// terminal speed, held first and then released (test::HeldBody, without Bullet). Every
+// test also asserts that no fluid centre ever entered a body's exact shape
+// (max_penetrating == 0).
 #include "bullet_bridge/scene_world.hpp"
+#include "coupling/simulation.hpp"
 #include "coupling/test_support.hpp"
+#include "geometry/shape.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -562,17 +568,22 @@ struct SettlingCase {
   double ratio;  ///< the sphere's density over the fluid's
   double nu;     ///< the fluid's kinematic viscosity (m^2/s)
   double r;      ///< the particle radius (m)
+  FluidSolver solver = FluidSolver::Wcsph;
 };
 
-/// A sphere 1.5 cm across (5 spacings at r = 1.5 mm, 7.5 at r = 1 mm) released at rest 2.5
-/// cm below the surface of a fluid with a physical viscosity alone (no artificial one) in
-/// an 8 cm square tank, deep enough for it to come within 2 % of its terminal speed (by
-/// SettlingLaw, in the tank's equivalent tube, squareTankTube) and then fall for 0.25 s
-/// (at most 4 cm) before it comes within two diameters of the floor, or within twice the
-/// viscous length nu / v if that is more (at Re 0.6, 5.4 cm: in slow flow the floor slows
-/// a sphere from afar, 1 + 9 a / 8 h for a sphere of radius a at h in Stokes flow, and the
-/// fluid's inertia screens it only beyond about nu / v). Its mean speed over that steady
-/// fall against the law's over the same time. Returns measured / law - 1.
+/// A sphere 1.5 cm across (5 spacings at r = 1.5 mm, 7.5 at r = 1 mm) held 2.5 cm below
+/// the surface of a fluid with a physical viscosity alone (no artificial one) in an 8 cm
+/// square tank for 0.2 s, while the fluid, which starts at its rest density with no
+/// pressure, settles to its hydrostatic pressure, then released (as the law's sphere is,
+/// in fluid at rest with its pressure). The tank is deep enough for it to come within 2 %
+/// of its terminal speed (by SettlingLaw, in the tank's equivalent tube, squareTankTube)
+/// and then fall for 0.25 s (at most 4 cm) before it comes within two diameters of the
+/// floor, or within twice the viscous length nu / v if that is more (at Re 0.6, 5.4 cm: in slow
+/// flow the floor slows a sphere from afar, 1 + 9 a / 8 h for a sphere of radius a at h in Stokes
+/// flow, and the fluid's inertia screens it only beyond about nu / v). Its mean speed over that
+/// steady fall against the law's over the same time, and the parts of the fluid's force over it
+/// (Simulation::lastWrenchParts) as shares of the sphere's weight net of buoyancy.
+/// Returns measured / law - 1.
 double settlingError(const SettlingCase& c) {
   constexpr double radius = 0.0075, width = 0.08, rho = 1000.0;
   const double d = 2 * radius, tube = squareTankTube(width);
@@ -587,16 +598,56 @@ double settlingError(const SettlingCase& c) {
   law = SettlingLaw(c.ratio, d, tube, rho, c.nu);
 
   const Vec3 start(width / 2, start_y, width / 2);
-  SceneWorld world(sphereInTank({c.r, rho, c.nu, 0.0, width, depth}, radius, c.ratio, start_y));
+  constexpr double hold = 0.2;
+  SimulationSettings s;
+  s.fluid.particle_radius = c.r;
+  s.fluid.rest_density = rho;
+  s.fluid.kinematic_viscosity = c.nu;
+  s.fluid.viscosity = 0.0;
+  s.method = CouplingMethod::Local;
+  s.solver = c.solver;
+  s.blocks.push_back({Vec3::Zero(), Vec3(width, depth, width)});
+  BodySettings tank_body;
+  tank_body.name = "tank";
+  tank_body.kind = BodyKind::Static;
+  tank_body.coupling = CouplingMode::OneWay;
+  tank_body.shape = makeTank(Vec3::Zero(), Vec3(width, depth + 0.02, width), 0.01);
+  BodySettings ball;
+  ball.name = "ball";
+  ball.kind = BodyKind::Dynamic;
+  ball.shape = makeSphere(radius);
+  ball.pose.position = start;
+  const double mass = c.ratio * rho * 4.0 / 3.0 * M_PI * radius * radius * radius;
+  ball.mass = mass;
+  ball.inertia = Vec3::Constant(0.4 * mass * radius * radius);
+  s.bodies.push_back(std::move(tank_body));
+  s.bodies.push_back(std::move(ball));
+  double t_from = -1.0;  // the steady fall's start, after the release
+  Simulation sim(s, std::make_unique<test::HeldBody>(RigidState{s.bodies[0].pose},
+                                                     RigidState{s.bodies[1].pose},
+                                                     s.bodies[1].inertia, hold, mass));
+  double pressure = 0.0, shear = 0.0, control = 0.0, steady = 0.0;  // impulses, s
+  auto advance = [&](double until) {
+    while (sim.time() < until - 1e-12) {
+      const double dt = sim.step(until);
+      if (t_from < 0) continue;
+      const WrenchParts& p = sim.lastWrenchParts()[1];
+      pressure += dt * p.pressure.force.y();
+      shear += dt * p.shear.force.y();
+      control += dt * p.control.force.y();
+      steady += dt;
+    }
+  };
+  advance(hold);
   constexpr double kSample = 0.005;
-  double t = 0.0, y = 0.0, y_from = 0.0, y_law_from = 0.0, t_from = -1.0;
+  double t = 0.0, y = 0.0, y_from = 0.0, y_law_from = 0.0;
   std::string trace;  // the speed every 0.05 s
   double y_trace = 0.0;
   for (int k = 1;; ++k) {
     t = kSample * k;
-    world.coupled().advanceTo(t);
+    advance(hold + t);
     law.advanceTo(t);
-    y = world.simulation().bodyStates()[1].position.y() - start.y();
+    y = sim.bodyStates()[1].position.y() - start.y();
     if (k % 10 == 0) {
       trace += " " + std::to_string(int(std::lround(1e4 * (y_trace - y) / (10 * kSample))));
       y_trace = y;
@@ -611,18 +662,29 @@ double settlingError(const SettlingCase& c) {
   const double span = t - t_from;
   const double speed = (y - y_from) / span, speed_law = (law.y() - y_law_from) / span;
   const double re = std::abs(terminal) * d / c.nu;
+  const double archimedes = rho * 9.81 * M_PI * d * d * d / 6;
+  const double net = (c.ratio - 1.0) * archimedes * steady;  // N s over the steady fall
   std::printf(
-      "[ settling ] density ratio %.2f, nu %.0e, r %.2f mm (%.1f spacings across), Re %.1f: "
-      "mean speed %.2f to %.2f s %.4f m/s, the law %.4f m/s (terminal %.4f): %+.1f %%, "
-      "max_penetrating %zu; speed every 0.05 s (0.1 mm/s):%s\n",
-      c.ratio, c.nu, 1e3 * c.r, d / (2 * c.r), re, t_from, t, -speed, -speed_law, -terminal,
-      100.0 * (speed / speed_law - 1.0), world.simulation().maxPenetrating(), trace.c_str());
-  EXPECT_EQ(world.simulation().maxPenetrating(), 0u);
+      "[ settling ] %s, density ratio %.2f, nu %.0e, r %.2f mm (%.1f spacings across), Re "
+      "%.1f: mean speed %.2f to %.2f s %.4f m/s, the law %.4f m/s (terminal %.4f): %+.1f %%, "
+      "max_penetrating %zu; of the net weight: pressure beyond Archimedes %+.3f, shear %+.3f, "
+      "control %+.3f; speed every 0.05 s (0.1 mm/s):%s\n",
+      c.solver == FluidSolver::Dfsph ? "DFSPH" : "WCSPH", c.ratio, c.nu, 1e3 * c.r, d / (2 * c.r),
+      re, t_from, t, -speed, -speed_law, -terminal, 100.0 * (speed / speed_law - 1.0),
+      sim.maxPenetrating(), (pressure - archimedes * steady) / net, shear / net, control / net,
+      trace.c_str());
+  EXPECT_EQ(sim.maxPenetrating(), 0u);
   EXPECT_GT(span, 0.5 * steady_fall / std::abs(terminal));  // it did fall steadily
   return speed / speed_law - 1.0;
 }
 
 class Settling : public ::testing::TestWithParam<SettlingCase> {};
+
+std::string settlingName(const SettlingCase& c) {
+  return "density_" + std::to_string(int(std::lround(100 * c.ratio))) + "_nu_" +
+         std::to_string(int(std::lround(1e6 * c.nu))) + "mm2s_r_" +
+         std::to_string(int(std::lround(1e6 * c.r))) + "um";
+}
 
 TEST_P(Settling, TerminalSpeedFollowsTheDragLaw) {
   EXPECT_NEAR(settlingError(GetParam()), 0.0, 0.1);
@@ -634,11 +696,17 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(SettlingCase{3.0, 2e-3, 0.0015}, SettlingCase{3.0, 2e-3, 0.001},
                       SettlingCase{1.5, 2e-4, 0.0015}, SettlingCase{1.5, 2e-4, 0.001},
                       SettlingCase{2.0, 1e-4, 0.0015}, SettlingCase{2.0, 1e-4, 0.001}),
-    [](const ::testing::TestParamInfo<SettlingCase>& p) {
-      return "density_" + std::to_string(int(std::lround(100 * p.param.ratio))) + "_nu_" +
-             std::to_string(int(std::lround(1e6 * p.param.nu))) + "mm2s_r_" +
-             std::to_string(int(std::lround(1e6 * p.param.r))) + "um";
-    });
+    [](const ::testing::TestParamInfo<SettlingCase>& p) { return settlingName(p.param); });
+
+// With DFSPH the contacts' control holds a moving body up (docs/forces.md): at Re 0.6 the
+// sphere fell 60 % slower than the law, at Re 10 91 % (the control 0.88 and 1.60 of its
+// net weight). Instantiated disabled until DFSPH's walls hold the fluid off alone.
+INSTANTIATE_TEST_SUITE_P(DISABLED_ReDfsph, Settling,
+                         ::testing::Values(SettlingCase{3.0, 2e-3, 0.0015, FluidSolver::Dfsph},
+                                           SettlingCase{1.5, 2e-4, 0.0015, FluidSolver::Dfsph}),
+                         [](const ::testing::TestParamInfo<SettlingCase>& p) {
+                           return settlingName(p.param);
+                         });
 
 class BodyContact : public test::SolverTest {};
 INSTANTIATE_TEST_SUITE_P(, BodyContact, test::kSolvers, test::solverName);
