@@ -11,7 +11,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -394,16 +393,22 @@ struct ViscousTank {
   double width, depth;
 };
 
-/// `tank` with a dynamic sphere ("ball", body 1) of `ratio` times the fluid's density at
-/// rest on the tank's axis at height `y`; WCSPH, local control.
-SceneWorld sphereInTank(const ViscousTank& tank_, double radius, double ratio, double y) {
+/// The fluid of `tank` (its block; no bodies yet); WCSPH, local control.
+SimulationSettings viscousFluid(const ViscousTank& tank) {
   SimulationSettings s;
-  s.fluid.particle_radius = tank_.r;
-  s.fluid.rest_density = tank_.rho;
-  s.fluid.kinematic_viscosity = tank_.nu;
-  s.fluid.viscosity = tank_.alpha;
+  s.fluid.particle_radius = tank.r;
+  s.fluid.rest_density = tank.rho;
+  s.fluid.kinematic_viscosity = tank.nu;
+  s.fluid.viscosity = tank.alpha;
   s.method = CouplingMethod::Local;
-  s.blocks.push_back({Vec3::Zero(), Vec3(tank_.width, tank_.depth, tank_.width)});
+  s.blocks.push_back({Vec3::Zero(), Vec3(tank.width, tank.depth, tank.width)});
+  return s;
+}
+
+/// `tank` with a dynamic sphere ("ball", body 1) of `ratio` times the fluid's density at
+/// rest on the tank's axis at height `y`, through the scene path (Bullet).
+SceneWorld sphereInTank(const ViscousTank& tank_, double radius, double ratio, double y) {
+  const SimulationSettings s = viscousFluid(tank_);
   BodySpec ball;
   ball.name = "ball";
   ball.kind = BodyKind::Dynamic;
@@ -599,28 +604,18 @@ double settlingError(const SettlingCase& c) {
 
   const Vec3 start(width / 2, start_y, width / 2);
   constexpr double hold = 0.2;
-  SimulationSettings s;
-  s.fluid.particle_radius = c.r;
-  s.fluid.rest_density = rho;
-  s.fluid.kinematic_viscosity = c.nu;
-  s.fluid.viscosity = 0.0;
-  s.method = CouplingMethod::Local;
+  SimulationSettings s = viscousFluid({c.r, rho, c.nu, 0.0, width, depth});
   s.solver = c.solver;
-  s.blocks.push_back({Vec3::Zero(), Vec3(width, depth, width)});
-  BodySettings tank_body;
-  tank_body.name = "tank";
-  tank_body.kind = BodyKind::Static;
-  tank_body.coupling = CouplingMode::OneWay;
-  tank_body.shape = makeTank(Vec3::Zero(), Vec3(width, depth + 0.02, width), 0.01);
+  s.bodies.push_back(
+      test::staticBody("tank", makeTank(Vec3::Zero(), Vec3(width, depth + 0.02, width), 0.01)));
   BodySettings ball;
   ball.name = "ball";
   ball.kind = BodyKind::Dynamic;
   ball.shape = makeSphere(radius);
   ball.pose.position = start;
-  const double mass = c.ratio * rho * 4.0 / 3.0 * M_PI * radius * radius * radius;
+  const double volume = M_PI * d * d * d / 6, mass = c.ratio * rho * volume;
   ball.mass = mass;
   ball.inertia = Vec3::Constant(0.4 * mass * radius * radius);
-  s.bodies.push_back(std::move(tank_body));
   s.bodies.push_back(std::move(ball));
   double t_from = -1.0;  // the steady fall's start, after the release
   Simulation sim(s, std::make_unique<test::HeldBody>(RigidState{s.bodies[0].pose},
@@ -662,7 +657,7 @@ double settlingError(const SettlingCase& c) {
   const double span = t - t_from;
   const double speed = (y - y_from) / span, speed_law = (law.y() - y_law_from) / span;
   const double re = std::abs(terminal) * d / c.nu;
-  const double archimedes = rho * 9.81 * M_PI * d * d * d / 6;
+  const double archimedes = rho * 9.81 * volume;
   const double net = (c.ratio - 1.0) * archimedes * steady;  // N s over the steady fall
   std::printf(
       "[ settling ] %s, density ratio %.2f, nu %.0e, r %.2f mm (%.1f spacings across), Re "
