@@ -72,8 +72,15 @@ class HeldBody final : public RigidBodies {
     if (!held()) states_[1].linear_velocity += dt * (gravity_ + fluid[1].force / mass_);
     states_[1].pose.position += dt * states_[1].linear_velocity;
     time_ += dt;
+    if (held() && time_ >= move_from_ - 1e-12) states_[1].linear_velocity = move_velocity_;
   }
   bool held() const { return time_ < release_ - 1e-12; }
+  /// While held: from time `t` on (a step's end), at the set velocity `v` instead of the
+  /// start's.
+  void moveFrom(double t, const Vec3& v) {
+    move_from_ = t;
+    move_velocity_ = v;
+  }
 
  private:
   std::array<RigidState, 2> states_;
@@ -81,6 +88,8 @@ class HeldBody final : public RigidBodies {
   double release_, mass_;
   Vec3 gravity_;
   double time_ = 0.0;
+  double move_from_ = std::numeric_limits<double>::infinity();
+  Vec3 move_velocity_ = Vec3::Zero();
 };
 
 /// A tank (cavity [0, size]) with one fluid block.

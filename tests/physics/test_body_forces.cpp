@@ -88,11 +88,10 @@ TEST_P(HeldAtRest, FeelsArchimedesWithoutAOneSidedControl) {
   // Weakly compressible fluid: contacts at half the radius leave the resting layer alone
   // (with contacts at the full radius the control carried 0.40-0.46 of a near-neutral
   // sphere's buoyancy) and the pressure is the samples' surface integral. Measured (r = 2.5
-  // mm, 1 s): sphere 0.958, cube 0.998 of Archimedes, the control's share under 0.02 of it;
-  // the sphere's 4 % is the fluid's pressure just below it, a few pascals under
-  // hydrostatic (docs/forces.md). The divergence-free solver keeps its contacts at the
-  // full radius: sphere 0.950, 0.068 of it from the control. A cube resting on the floor
-  // (its bottom face dry, addContactPressure): 0.950, local and global.
+  // mm, 1 s): sphere 0.9992, cube 0.9992 of Archimedes, the control's share under 0.001 of
+  // it; a cube resting on the floor (its bottom face dry, addContactPressure) 0.9979, local
+  // and global (docs/forces.md). The divergence-free solver keeps its contacts at the full
+  // radius: sphere 0.950, 0.068 of it from the control (at half the radius 0.921).
   const HeldCase& c = GetParam();
   const HeldForce f = heldForce(c, 1.0);
   EXPECT_EQ(f.max_penetrating, 0u);
