@@ -601,6 +601,19 @@ SimulationSettings sphereInViscousTank(const SettlingCase& c, double d, double w
   return s;
 }
 
+/// The vertical parts of the fluid's force on body 1 summed over steps: impulses (N s) and
+/// the time they cover (s).
+struct VerticalImpulses {
+  double pressure = 0.0, shear = 0.0, control = 0.0, span = 0.0;
+  void add(const Simulation& sim, double dt) {
+    const WrenchParts& p = sim.lastWrenchParts()[1];
+    pressure += dt * p.pressure.force.y();
+    shear += dt * p.shear.force.y();
+    control += dt * p.control.force.y();
+    span += dt;
+  }
+};
+
 /// A sphere 1.5 cm across (5 spacings at r = 1.5 mm, 7.5 at r = 1 mm) held 2.5 cm below
 /// the surface of a fluid with a physical viscosity alone (no artificial one) in an 8 cm
 /// square tank for 0.2 s, while the fluid, which starts at its rest density with no
@@ -635,16 +648,11 @@ double settlingError(const SettlingCase& c) {
   Simulation sim(s, std::make_unique<test::HeldBody>(RigidState{s.bodies[0].pose},
                                                      RigidState{s.bodies[1].pose},
                                                      s.bodies[1].inertia, hold, mass));
-  double pressure = 0.0, shear = 0.0, control = 0.0, steady = 0.0;  // impulses, s
+  VerticalImpulses steady;  // over the steady fall
   auto advance = [&](double until) {
     while (sim.time() < until - 1e-12) {
       const double dt = sim.step(until);
-      if (t_from < 0) continue;
-      const WrenchParts& p = sim.lastWrenchParts()[1];
-      pressure += dt * p.pressure.force.y();
-      shear += dt * p.shear.force.y();
-      control += dt * p.control.force.y();
-      steady += dt;
+      if (t_from >= 0) steady.add(sim, dt);
     }
   };
   advance(hold);
@@ -672,7 +680,7 @@ double settlingError(const SettlingCase& c) {
   const double speed = (y - y_from) / span, speed_law = (law.y() - y_law_from) / span;
   const double re = std::abs(terminal) * d / c.nu;
   const double archimedes = rho * 9.81 * volume;
-  const double net = (c.ratio - 1.0) * archimedes * steady;  // N s over the steady fall
+  const double net = (c.ratio - 1.0) * archimedes * steady.span;  // N s over the steady fall
   std::printf(
       "[ settling ] %s, density ratio %.2f, nu %.0e, r %.2f mm (%.1f spacings across), Re "
       "%.1f: mean speed %.2f to %.2f s %.4f m/s, the law %.4f m/s (terminal %.4f): %+.1f %%, "
@@ -680,8 +688,8 @@ double settlingError(const SettlingCase& c) {
       "control %+.3f; speed every 0.05 s (0.1 mm/s):%s\n",
       c.solver == FluidSolver::Dfsph ? "DFSPH" : "WCSPH", c.ratio, c.nu, 1e3 * c.r, d / (2 * c.r),
       re, t_from, t, -speed, -speed_law, -terminal, 100.0 * (speed / speed_law - 1.0),
-      sim.maxPenetrating(), (pressure - archimedes * steady) / net, shear / net, control / net,
-      trace.c_str());
+      sim.maxPenetrating(), (steady.pressure - archimedes * steady.span) / net, steady.shear / net,
+      steady.control / net, trace.c_str());
   EXPECT_EQ(sim.maxPenetrating(), 0u);
   EXPECT_GT(span, 0.5 * steady_fall / std::abs(terminal));  // it did fall steadily
   return speed / speed_law - 1.0;
@@ -725,11 +733,8 @@ INSTANTIATE_TEST_SUITE_P(DISABLED_ReDfsph, Settling,
 /// impulsive start the history force 6 pi mu a U K(t) (historyKernel) comes on top. The
 /// fluid's force net of Archimedes along the motion, averaged over 0.3-0.6 s of motion,
 /// against the law's (both with the history force) over the same time: the drag at a known
-/// speed, without the sphere's own dynamics. Prints its parts as shares of the law's force,
-/// and the first layer of fluid around the sphere (particles within 2 r of its surface,
-/// every 0.01 s): its mean distance from the surface, and its pressure against hydrostatic
-/// on the sphere's top and bottom caps (within 45 degrees of the axis), beside Stokes'
-/// 1.5 mu U / a. Returns measured / law - 1.
+/// speed, without the sphere's own dynamics. Prints its parts as shares of the law's force.
+/// Returns measured / law - 1.
 double movedSphereDragError(const SettlingCase& c) {
   constexpr double radius = 0.0075, width = 0.08, hold = 0.2, t0 = 0.3, t1 = 0.6;
   const double d = 2 * radius, tube = squareTankTube(width);
@@ -753,50 +758,24 @@ double movedSphereDragError(const SettlingCase& c) {
             6 * M_PI * mu * radius * speed * historyKernel(t, speed, d, c.nu)) /
            kPoints;
   }
-  double pressure = 0.0, shear = 0.0, control = 0.0, span = 0.0;  // impulses (N s), s
-  double gap = 0.0, layer = 0.0, top = 0.0, tops = 0.0, bottom = 0.0, bottoms = 0.0;
-  const double surface = depth + volume / (width * width);  // the sphere's displacement
-  for (double t = 0.01; t < hold + t1 + 1e-9; t += 0.01) {
+  VerticalImpulses motion;                                  // over [t0, t1] of motion
+  for (double t = 0.01; t < hold + t1 + 1e-9; t += 0.01) {  // steps landing on every 0.01 s
     while (sim.time() < t - 1e-12) {
       const double dt = sim.step(t);
-      if (sim.time() <= hold + t0 + 1e-12) continue;
-      const WrenchParts& p = sim.lastWrenchParts()[1];
-      pressure += dt * p.pressure.force.y();
-      shear += dt * p.shear.force.y();
-      control += dt * p.control.force.y();
-      span += dt;
-    }
-    if (t < hold + t0 - 1e-9) continue;
-    const FluidState& st = sim.fluid().state();
-    const Vec3 centre = sim.bodyStates()[1].position;
-    for (std::size_t i = 0; i < st.size(); ++i) {
-      const Vec3 q = st.position[i] - centre;
-      const double g = q.norm() - radius;
-      if (g >= 2 * c.r) continue;
-      gap += g;
-      layer += 1;
-      const double excess = st.pressure[i] - kViscousRho * 9.81 * (surface - st.position[i].y());
-      if (q.y() > 0.7071 * q.norm()) {
-        top += excess;
-        tops += 1;
-      } else if (q.y() < -0.7071 * q.norm()) {
-        bottom += excess;
-        bottoms += 1;
-      }
+      if (sim.time() > hold + t0 + 1e-12) motion.add(sim, dt);
     }
   }
-  const double drag = (pressure + shear + control) / span - archimedes;
+  const double drag = (motion.pressure + motion.shear + motion.control) / motion.span - archimedes;
   std::printf(
       "[ moved ] %s, density ratio %.2f, nu %.0e, r %.2f mm (%.1f spacings across), moved at "
       "%.4f m/s (Re %.1f): drag over %.1f-%.1f s of motion %.3e N, the law %.3e N (net weight "
       "%.3e N): %+.1f %%, max_penetrating %zu; of the law's force: pressure beyond Archimedes "
-      "%+.3f, shear %+.3f, control %+.3f; first layer: %.2f r from the surface, pressure "
-      "against hydrostatic on top %+.1f Pa, below %+.1f Pa (Stokes -/+ %.1f)\n",
+      "%+.3f, shear %+.3f, control %+.3f\n",
       c.solver == FluidSolver::Dfsph ? "DFSPH" : "WCSPH", c.ratio, c.nu, 1e3 * c.r, d / (2 * c.r),
       speed, speed * d / c.nu, t0, t1, drag, law, (c.ratio - 1) * archimedes,
-      100.0 * (drag / law - 1.0), sim.maxPenetrating(), (pressure / span - archimedes) / law,
-      shear / span / law, control / span / law, gap / layer / c.r, top / tops, bottom / bottoms,
-      1.5 * mu * speed / radius);
+      100.0 * (drag / law - 1.0), sim.maxPenetrating(),
+      (motion.pressure / motion.span - archimedes) / law, motion.shear / motion.span / law,
+      motion.control / motion.span / law);
   EXPECT_EQ(sim.maxPenetrating(), 0u);
   return drag / law - 1.0;
 }
