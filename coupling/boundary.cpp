@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 
@@ -554,7 +555,7 @@ void Boundaries::addContactPressure(const BodyPlacement& at, const Vec3& gravity
   std::vector<std::uint32_t> contact, level, next;
   // 0 neither, 1 known (wet), 2 contact not yet reached, 4 queued for the next level,
   // 3 reached
-  std::vector<std::uint8_t> state;
+  std::vector<std::uint8_t> state, source;
   std::vector<double> value;  // P^s (Pa) of the known and the reached
   pressure.touching.resize(moving_.size() + 1);
   for (std::size_t m = 0; m < moving_.size(); ++m) {
@@ -567,29 +568,46 @@ void Boundaries::addContactPressure(const BodyPlacement& at, const Vec3& gravity
     if (force.size() != n || wet.size() != n)
       throw std::logic_error("Boundaries::addContactPressure before computeSamplePressure");
     const BodyFrame& frame = at[mb.body];
-    // The dry samples whose surface point another body's surface is within reach of.
+    // The contact samples: those whose surface point another body's surface is within
+    // reach of, dry, or wet and facing it (a film thinner than a particle's diameter,
+    // whose few squeezed particles are no measure of its pressure). The other wet samples
+    // are the known ones.
     contact.clear();
+    source.assign(n, 0);
     std::vector<std::uint8_t>& touch = pressure.touching[m + 1];
     touch.assign(wet_too ? n : 0, 0);
     std::size_t known = 0;
     for (std::size_t k = 0; k < n; ++k) {
-      if (wet[k]) ++known;
-      if (wet[k] && !wet_too) continue;
-      const Vec3 s =
-          frame.rotation * (set.position[k] + radius_ * set.normal[k]) + frame.pose.position;
-      bool touching = false;
+      const Vec3 normal = frame.rotation * set.normal[k];
+      const Vec3 s = frame.rotation * set.position[k] + frame.pose.position + radius_ * normal;
+      std::array<std::pair<std::uint32_t, double>, 8> near;
+      std::size_t near_count = 0;
       forEachBodyDistance(s, at, [&](std::uint32_t body, bool, double d) {
-        if (body != mb.body && d < reach) touching = true;
+        if (body != mb.body && d < reach && near_count < near.size())
+          near[near_count++] = {body, d};
       });
-      if (!touching) continue;
+      bool facing = false;
+      if (wet[k] && near_count > 0) {
+        // Facing: the other surface's distance falls along the sample's normal.
+        const double step = 0.25 * radius_;
+        forEachBodyDistance(s + step * normal, at, [&](std::uint32_t body, bool, double d) {
+          for (std::size_t q = 0; q < near_count; ++q)
+            if (near[q].first == body && d - near[q].second < -0.5 * step) facing = true;
+        });
+      }
+      if (wet[k] && !facing) {
+        source[k] = 1;
+        ++known;
+      }
+      if (near_count == 0) continue;
       if (wet_too) touch[k] = 1;
-      if (!wet[k]) contact.push_back(static_cast<std::uint32_t>(k));
+      if (!source[k]) contact.push_back(static_cast<std::uint32_t>(k));
     }
     if (contact.empty() || known == 0) continue;
     state.assign(n, 0);
     value.assign(n, 0.0);
     for (std::size_t k = 0; k < n; ++k)
-      if (wet[k]) {
+      if (source[k]) {
         state[k] = 1;
         value[k] = force[k] / set.area[k];
       }

@@ -275,9 +275,13 @@ class Boundaries {
                        std::vector<Wrench>& reaction, bool touching_only = false) const;
   /// The pressure on a two-way body's contact faces, into `pressure.surface_force` before
   /// addBodyPressure: where the body touches another body or a wall, no particle fits
-  /// between the two faces, yet real water reaches any real gap. A dry sample (no fluid in
-  /// front of its face) whose surface point lies within 2 r of another body's exact
-  /// surface is a contact sample; each gets the pressure of the wetted samples next to it
+  /// between the two faces, yet real water reaches any real gap. A sample whose surface
+  /// point lies within 2 r of another body's exact surface is a contact sample when it is
+  /// dry (no fluid in front of its face) or faces that surface (its distance falls along
+  /// the sample's normal: a film thinner than a particle's diameter, such as the last
+  /// water under a body settling on the floor, whose few squeezed particles are no
+  /// measure of its pressure and would hold the body up); each gets the pressure of the
+  /// other wetted samples next to it
   /// carried hydrostatically, P_k = mean_j (P^s_j + rho0 g . (s_k - s_j)) (s the surface
   /// points, j its neighbours within 2 r already known), level by level inwards from the
   /// contact's wetted rim, clamped at 0 (above the water) and 0 where no wetted sample

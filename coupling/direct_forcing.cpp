@@ -104,7 +104,6 @@ ControlResult DirectForcing::control(const Boundaries& boundaries, const Control
     wrench[b].force += lin / dt;
     wrench[b].torque += ang / dt;
   }
-  supportBackedContacts(dt, bodies.predicted, chunk_count, wrench);
   return result;
 }
 
@@ -216,74 +215,6 @@ void DirectForcing::solveGlobal(const std::vector<RigidPrediction>& predicted, d
       if (count > 1) normalPasses(ch, rec, count, vi, predicted, bodyChange, 2);
       v[i] = vi;
     });
-  }
-}
-
-void DirectForcing::supportBackedContacts(double dt, const std::vector<RigidPrediction>& predicted,
-                                          std::size_t chunk_count, std::vector<Wrench>& wrench) {
-  const std::vector<std::uint8_t>& two_way = two_way_;
-  // A particle pressed between a two-way body and a one-way one (a box settling on the
-  // floor, a body pushed against a wall) cannot give way: the one-way contact fixes its
-  // normal velocity. So the two-way body meets it as it would meet the wall: the contact's
-  // impulse acts on the body alone (infinite particle mass) until the body no longer
-  // approaches the particle. Solved for all such contacts of a body at once by projected
-  // Gauss-Seidel (accumulated impulses >= 0), in the fixed order of the particles.
-  backed_.clear();
-  for (std::size_t c = 0; c < chunk_count; ++c) {
-    forEachParticle(chunks_[c].records, [&](const Record* rec, std::size_t count) {
-      for (std::size_t a = 0; a < count && count > 1; ++a) {
-        if (!two_way[rec[a].body]) continue;
-        // The most opposed one-way contact backs it.
-        double opposed = -0.5;
-        std::size_t backer = count;
-        for (std::size_t b = 0; b < count; ++b) {
-          const double cosine = rec[a].normal.dot(rec[b].normal);
-          if (!two_way[rec[b].body] && cosine < opposed) opposed = cosine, backer = b;
-        }
-        if (backer == count) continue;
-        backed_.push_back(rec[a]);
-        backed_.back().backer = rec[backer].v_cp;
-      }
-    });
-  }
-  if (backed_.empty()) return;
-  const std::size_t nb = wrench.size();
-  for (std::size_t b = 0; b < nb; ++b) {
-    if (!two_way[b]) continue;
-    const RigidPrediction& p = predicted[b];
-    const Mat3& inv_i = p.inverse_inertia_world;
-    // The body's velocity change from the control so far.
-    Vec3 dV = wrench[b].force * (dt * p.inverse_mass);
-    Vec3 dW = inv_i * wrench[b].torque * dt;
-    Vec3 impulse = Vec3::Zero(), angular = Vec3::Zero();
-    lambda_.assign(backed_.size(), 0.0);
-    for (int iteration = 0; iteration < 20; ++iteration) {
-      double largest = 0.0;
-      for (std::size_t c = 0; c < backed_.size(); ++c) {
-        const Record& rec = backed_[c];
-        if (rec.body != b) continue;
-        // The particle moves with the one-way body behind it (that contact fixed its
-        // normal velocity): the body approaches that body, not the particle's own
-        // velocity, which would let a fast particle push the body as if it had no end of
-        // mass.
-        const Vec3 v_body = rec.v_cp + dV + dW.cross(rec.lever);
-        const double vn = (rec.backer - v_body).dot(rec.normal);
-        const Vec3 rn = rec.lever.cross(rec.normal);
-        const double k = normalCompliance(0.0, p.inverse_mass, inv_i, rec.lever, rec.normal);
-        const double j = std::max(-lambda_[c], (rec.bounce - vn) / k);
-        if (j == 0.0) continue;
-        lambda_[c] += j;
-        // The particle would take +j n: the body takes -j n at the lever.
-        dV -= (j * p.inverse_mass) * rec.normal;
-        dW -= inv_i * (j * rn);
-        impulse -= j * rec.normal;
-        angular -= j * rn;
-        largest = std::max(largest, std::abs(j) * k);
-      }
-      if (largest < 1e-9) break;
-    }
-    wrench[b].force += impulse / dt;
-    wrench[b].torque += angular / dt;
   }
 }
 

@@ -33,7 +33,6 @@ using Vec6 = Eigen::Matrix<double, 6, 1>;
 /// normal n on the particle (and its reaction on the body at lever r): n^T K n with
 /// K = (1/m_i + 1/m_c) E - [r]x I^-1 [r]x, i.e. 1/m_i + 1/m_c + (r x n) . I^-1 (r x n)
 /// (1/kg).
-/// particle_inverse_mass 0: a particle that cannot give way (backed by a wall).
 double normalCompliance(double particle_inverse_mass, double body_inverse_mass,
                         const Mat3& inverse_inertia, const Vec3& lever, const Vec3& normal);
 
@@ -105,11 +104,13 @@ class DirectForcing {
  public:
   explicit DirectForcing(const FluidParams& fluid) : particle_mass_(fluid.particleMass()) {}
 
-  /// Velocity control at the predicted positions, in three stages: the contacts and each
-  /// one's normal velocity change psi (findContacts), the impulses of the local or global
-  /// approach (solveLocal, solveGlobal), then the contacts that a one-way body backs
-  /// (supportBackedContacts). wrench: (bodies) the fluid's force and torque on each two-way
-  /// body for this step (zero for one-way bodies).
+  /// Velocity control at the predicted positions, in two stages: the contacts and each
+  /// one's normal velocity change psi (findContacts), then the impulses of the local or
+  /// global approach (solveLocal, solveGlobal). A particle between a two-way body and a
+  /// wall (a film under a body settling on the floor) meets the body with its own mass: it
+  /// does not carry the body; the position correction moves it out of a closing gap, and
+  /// Bullet's contact carries the body. wrench: (bodies) the fluid's force and torque on
+  /// each two-way body for this step (zero for one-way bodies).
   ControlResult control(const Boundaries& boundaries, const ControlBodies& bodies,
                         const ControlFluid& fluid, CouplingMethod method, double dt,
                         std::vector<Wrench>& wrench);
@@ -124,9 +125,6 @@ class DirectForcing {
     Vec3 v_cp = Vec3::Zero();  ///< contact-point velocity of the predicted body
     Vec3 normal = Vec3::Zero();
     double psi = 0;  ///< normal velocity change to the target, body unmoved (m/s)
-    /// Backed contacts (supportBackedContacts): velocity of the one-way body behind the
-    /// particle, at its contact point.
-    Vec3 backer = Vec3::Zero();
   };
   struct Chunk {
     std::vector<Record> records;         ///< a particle's contacts are consecutive
@@ -145,11 +143,6 @@ class DirectForcing {
   /// Global: each two-way body's contacts at once (GlobalSystem); sets its wrench.
   void solveGlobal(const std::vector<RigidPrediction>& predicted, double dt,
                    std::size_t chunk_count, std::vector<Vec3>& v, std::vector<Wrench>& wrench);
-  /// Contacts of two-way bodies with particles that a one-way body backs: their impulse
-  /// goes to the body alone (projected Gauss-Seidel), so the body rests on the particle
-  /// as on the wall behind it and cannot squeeze it into either.
-  void supportBackedContacts(double dt, const std::vector<RigidPrediction>& predicted,
-                             std::size_t chunk_count, std::vector<Wrench>& wrench);
   /// Calls f(first record, contact count) for each particle's run of records in `records`.
   template <class F>
   static void forEachParticle(const std::vector<Record>& records, F&& f);
@@ -166,8 +159,6 @@ class DirectForcing {
   double particle_mass_;
   std::vector<Chunk> chunks_;
   std::vector<std::uint8_t> two_way_;  ///< scratch: (bodies) 1 where the body reacts
-  std::vector<Record> backed_;         ///< scratch: backed contacts, in particle order
-  std::vector<double> lambda_;         ///< scratch: their accumulated impulses (N s)
 };
 
 }  // namespace wake
