@@ -553,8 +553,8 @@ void Boundaries::addContactPressure(const BodyPlacement& at, const Vec3& gravity
   const double reach = radius_ + radius_;  // the gap no particle crosses: 2 r
   const double rho0 = fluid_.rest_density;
   std::vector<std::uint32_t> contact, level, next;
-  // 0 neither, 1 known (wet), 2 contact not yet reached, 4 queued for the next level,
-  // 3 reached
+  // 0 neither, 1 known (wet, not facing a surface), 2 contact not yet reached, 4 queued
+  // for the next level, 3 reached
   std::vector<std::uint8_t> state, source;
   std::vector<double> value;  // P^s (Pa) of the known and the reached
   pressure.touching.resize(moving_.size() + 1);
@@ -580,7 +580,7 @@ void Boundaries::addContactPressure(const BodyPlacement& at, const Vec3& gravity
     for (std::size_t k = 0; k < n; ++k) {
       const Vec3 normal = frame.rotation * set.normal[k];
       const Vec3 s = frame.rotation * set.position[k] + frame.pose.position + radius_ * normal;
-      std::array<std::pair<std::uint32_t, double>, 8> near;
+      std::array<std::pair<std::uint32_t, double>, kMaxContacts> near;
       std::size_t near_count = 0;
       forEachBodyDistance(s, at, [&](std::uint32_t body, bool, double d) {
         if (body != mb.body && d < reach && near_count < near.size())

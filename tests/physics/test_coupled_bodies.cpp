@@ -93,6 +93,17 @@ double volumeLevel(const Simulation& sim, double tank_area, double box_area, dou
   return (volume - box_area * bottom) / (tank_area - box_area);
 }
 
+/// Height (m) of the lowest corner of a box of half extents `half` at state b.
+double lowestCorner(const BodyState& b, const Vec3& half) {
+  double lowest = b.position.y();
+  for (int corner = 0; corner < 8; ++corner) {
+    const Vec3 c((corner & 1 ? 1 : -1) * half.x(), (corner & 2 ? 1 : -1) * half.y(),
+                 (corner & 4 ? 1 : -1) * half.z());
+    lowest = std::min(lowest, (b.position + b.orientation * c).y());
+  }
+  return lowest;
+}
+
 /// The draft is averaged over the last 0.6 s of a run: one period of a dropped box's heave
 /// in this tank (0.65 s at density ratio 0.7). A dropped box still bobs by +-5 % of its
 /// draft at 1.2-1.5 s, so dropped runs last 2 s.
@@ -146,12 +157,7 @@ Floating floatBox(double density_ratio, CouplingMethod method, double end, doubl
   out.draft = sum / samples;
   out.surface_draft = surface_sum / samples;
   out.bottom = b.position.y() - half.y();
-  out.lowest = b.position.y();
-  for (int corner = 0; corner < 8; ++corner) {
-    const Vec3 c((corner & 1 ? 1 : -1) * half.x(), (corner & 2 ? 1 : -1) * half.y(),
-                 (corner & 4 ? 1 : -1) * half.z());
-    out.lowest = std::min(out.lowest, (b.position + b.orientation * c).y());
-  }
+  out.lowest = lowestCorner(b, half);
   out.speed = b.linear_velocity.norm();
   out.max_penetrating = world.simulation().maxPenetrating();
   const double archimedes = density_ratio * 2 * half.y();
@@ -348,12 +354,7 @@ Landing landOnFloor(FluidSolver solver, double ratio, CouplingMethod method, dou
     world.coupled().advanceTo(t0 + sim.max_dt);
     const double dt = world.coupled().time() - t0;
     const BodyState b = world.simulation().bodyStates()[1];
-    double lowest = b.position.y();
-    for (int corner = 0; corner < 8; ++corner) {
-      const Vec3 c((corner & 1 ? 1 : -1) * half.x(), (corner & 2 ? 1 : -1) * half.y(),
-                   (corner & 4 ? 1 : -1) * half.z());
-      lowest = std::min(lowest, (b.position + b.orientation * c).y());
-    }
+    const double lowest = lowestCorner(b, half);
     const double t = world.coupled().time();
     if (out.landed < 0 && lowest < 2 * kRadius) out.landed = t;
     if (lowest >= 0.25 * kRadius) out.settled = t;
