@@ -171,12 +171,82 @@ void Boundaries::addSolverReaction(const Fluid& fluid, const BodyPlacement& at,
     }
 }
 
+void Boundaries::matchBodyShapes() {
+  const double support = kernel_.supportRadius(), s = spacing_;
+  // The kernel's quadrature over a support: points h apart, each counting the share of its
+  // cell that lies inside the shape, from the signed distance d there (1/2 - d / h, within
+  // [0, 1]: the exact share for a face across the cell).
+  const double h = 0.5 * radius_;
+  const int reach = static_cast<int>(std::ceil(support / h));
+  std::vector<Vec3> offset;
+  std::vector<double> weight;
+  for (int i = -reach; i <= reach; ++i)
+    for (int j = -reach; j <= reach; ++j)
+      for (int k = -reach; k <= reach; ++k) {
+        const Vec3 q = h * Vec3(i, j, k);
+        if (q.norm() >= support) continue;
+        offset.push_back(q);
+        weight.push_back(kernel_.value(q.norm()));
+      }
+  auto inside = [h](double d) { return std::clamp(0.5 - d / h, 0.0, 1.0); };
+  // What a flat face's samples give a spacing from their plane (a fluid particle's radius
+  // outside the face): the lattice's missing layer, each sample s^3 (buildSet's volumes).
+  double flat = 0.0;
+  const int plane = static_cast<int>(std::ceil(support / s)) + 1;
+  for (int i = -plane; i <= plane; ++i)
+    for (int j = -plane; j <= plane; ++j)
+      flat += s * s * s * kernel_.value(s * std::sqrt(1.0 + i * i + j * j));
+  const double support_sq = support * support;
+  for (MovingBody& m : moving_) {
+    SampleSet& set = m.samples;
+    const Shape& shape = *bodies_[m.body].settings.shape;
+    const std::int64_t count = static_cast<std::int64_t>(set.position.size());
+    // Each sample's probe lies where the first fluid layer does, a radius outside the
+    // surface along its normal (the samples lie a radius inside). There the samples should
+    // give what a flat face's give, times the shape's kernel integral over a half-space's.
+    auto probe = [&](std::int64_t k) { return set.position[k] + 2.0 * radius_ * set.normal[k]; };
+    std::vector<double> target(count), actual(count);
+#pragma omp parallel for schedule(dynamic, 16)
+    for (std::int64_t k = 0; k < count; ++k) {
+      const Vec3 p = probe(k), n = set.normal[k];
+      double body = 0.0, half = 0.0;
+      for (std::size_t t = 0; t < offset.size(); ++t) {
+        body += weight[t] * inside(shape.signedDistance(p + offset[t]));
+        half += weight[t] * inside(offset[t].dot(n) + radius_);
+      }
+      target[k] = half > 0.0 ? flat * body / half : 0.0;
+    }
+    // Each sample's volume scaled by what its own probe lacks, a few rounds (a probe also
+    // reads the samples beside its own).
+    for (int round = 0; round < kShapeRounds; ++round) {
+#pragma omp parallel for schedule(static)
+      for (std::int64_t k = 0; k < count; ++k) {
+        const Vec3 p = probe(k);
+        double sum = 0.0;
+        set.grid.forEachRangeWithin(p, set.density_reach + 1,
+                                    [&](std::uint32_t lo, std::uint32_t hi) {
+                                      for (std::uint32_t l = lo; l < hi; ++l) {
+                                        const double d_sq = (p - set.position[l]).squaredNorm();
+                                        if (d_sq < support_sq)
+                                          sum += set.volume[l] * kernel_.value(std::sqrt(d_sq));
+                                      }
+                                    });
+        actual[k] = sum;
+      }
+      for (std::int64_t k = 0; k < count; ++k)
+        if (actual[k] > 0.0 && target[k] > 0.0)
+          set.volume[k] *= std::clamp(target[k] / actual[k], 0.5, 2.0);
+    }
+  }
+}
+
 void Boundaries::calibrateVolumes(const Fluid& fluid, const BodyPlacement& at) {
   const FluidState& st = fluid.state();
   const std::size_t n = st.size();
   if (n == 0 || bodies_.empty()) return;
   const double rho0 = fluid_.rest_density;
   const double support_sq = kernel_.supportRadius() * kernel_.supportRadius();
+  matchBodyShapes();
   std::vector<double> wall(n), scale(n);
   WallPairs pairs;
   for (int round = 0; round < 4; ++round) {

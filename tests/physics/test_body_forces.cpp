@@ -23,6 +23,8 @@ struct HeldCase {
   CouplingMethod method;
   bool sphere;            // else a cube
   bool on_floor = false;  // resting on the tank's floor (else 6 cm below the surface)
+  double half = 0.0125;   // the body's half size (m)
+  double r = 0.0025;      // the particle radius (m)
 };
 
 struct HeldForce {
@@ -34,7 +36,8 @@ struct HeldForce {
 /// of a 10 x 12 x 10 cm block of viscous fluid (nu = 5e-4 m^2/s: at rest within 0.4 s),
 /// held still for `end` seconds; the force averaged over the second half.
 HeldForce heldForce(const HeldCase& c, double end) {
-  constexpr double r = 0.0025, half = 0.0125, width = 0.1, height = 0.12;
+  const double r = c.r, half = c.half;
+  constexpr double width = 0.1, height = 0.12;
   SimulationSettings s;
   s.solver = c.solver;
   s.method = c.method;
@@ -91,14 +94,17 @@ TEST_P(HeldAtRest, FeelsArchimedesWithoutAOneSidedControl) {
   // mm, 1 s): sphere 0.9992, cube 0.9992 of Archimedes, the control's share under 0.001 of
   // it; a cube resting on the floor (its bottom face dry, addContactPressure) 0.9979, local
   // and global (docs/forces.md). The divergence-free solver keeps its contacts at the full
-  // radius: sphere 0.950, 0.068 of it from the control (at half the radius 0.921).
+  // radius; with its bodies' samples matched to their shapes (Boundaries::calibrateVolumes)
+  // sphere 1.006, cube 1.012, a sphere 3 spacings across 0.987, at r = 2 mm 0.980, 0.03-0.07
+  // of it from the control (before: sphere 0.950, cube 0.996, 1.031, 0.976).
   const HeldCase& c = GetParam();
   const HeldForce f = heldForce(c, 1.0);
   EXPECT_EQ(f.max_penetrating, 0u);
-  EXPECT_NEAR(f.total, 1.0, 0.06);
   if (c.solver == FluidSolver::Wcsph) {
+    EXPECT_NEAR(f.total, 1.0, 0.01);
     EXPECT_LT(std::abs(f.control), 0.02);
   } else {
+    EXPECT_NEAR(f.total, 1.0, 0.03);
     EXPECT_LT(std::abs(f.control), 0.15);
   }
 }
@@ -109,6 +115,12 @@ INSTANTIATE_TEST_SUITE_P(
         HeldCase{"wcsph_local_sphere", FluidSolver::Wcsph, CouplingMethod::Local, true},
         HeldCase{"wcsph_global_cube", FluidSolver::Wcsph, CouplingMethod::Global, false},
         HeldCase{"dfsph_local_sphere", FluidSolver::Dfsph, CouplingMethod::Local, true},
+        HeldCase{"dfsph_global_cube", FluidSolver::Dfsph, CouplingMethod::Global, false},
+        // Three spacings across; and at r = 2 mm (6.25 spacings).
+        HeldCase{"dfsph_global_sphere_3_spacings", FluidSolver::Dfsph, CouplingMethod::Global, true,
+                 false, 0.0075},
+        HeldCase{"dfsph_local_sphere_r_2mm", FluidSolver::Dfsph, CouplingMethod::Local, true, false,
+                 0.0125, 0.002},
         // Resting on the floor: the contact face feels the water's pressure too
         // (Boundaries::addContactPressure), so the total is still Archimedes'.
         HeldCase{"wcsph_global_cube_on_floor", FluidSolver::Wcsph, CouplingMethod::Global, false,
@@ -116,6 +128,15 @@ INSTANTIATE_TEST_SUITE_P(
         HeldCase{"wcsph_local_cube_on_floor", FluidSolver::Wcsph, CouplingMethod::Local, false,
                  true}),
     [](const ::testing::TestParamInfo<HeldCase>& i) { return std::string(i.param.label); });
+
+// The divergence-free solver's cube resting on the floor feels 0.85 of Archimedes (its
+// contact face's pressure, docs/forces.md): instantiated disabled.
+INSTANTIATE_TEST_SUITE_P(DISABLED_DfsphOnFloor, HeldAtRest,
+                         ::testing::Values(HeldCase{"dfsph_local_cube_on_floor", FluidSolver::Dfsph,
+                                                    CouplingMethod::Local, false, true}),
+                         [](const ::testing::TestParamInfo<HeldCase>& i) {
+                           return std::string(i.param.label);
+                         });
 
 }  // namespace
 }  // namespace wake
