@@ -13,17 +13,6 @@ namespace wake {
 
 namespace {
 
-/// Sum of W over a flat square lattice of spacing s through the origin: what one boundary
-/// sample sees of a flat wall sampled at the fluid spacing.
-double flatLatticeKernelSum(const CubicSplineKernel& kernel, double s) {
-  const int reach = static_cast<int>(std::ceil(kernel.supportRadius() / s)) + 1;
-  double sum = 0.0;
-  for (int i = -reach; i <= reach; ++i)
-    for (int j = -reach; j <= reach; ++j)
-      sum += kernel.value(s * std::hypot(i, j));
-  return sum;
-}
-
 /// Share of a no-slip wall's viscous shear that a wall of slip eps exerts: the wall with
 /// Navier slip length b = eps / (1 - eps) * 2H (2H: the kernel support, 4 particle radii
 /// at H = one spacing) over the first fluid layer, which lies one radius r from the
@@ -34,6 +23,16 @@ double wallShearFactor(double eps) {
 
 }  // namespace
 
+double Boundaries::flatLatticeKernelSum(const CubicSplineKernel& kernel, double s, double height) {
+  const int reach = static_cast<int>(std::ceil(kernel.supportRadius() / s)) + 1;
+  const double rise = (height / s) * (height / s);
+  double sum = 0.0;
+  for (int i = -reach; i <= reach; ++i)
+    for (int j = -reach; j <= reach; ++j)
+      sum += kernel.value(s * std::sqrt(rise + i * i + j * j));
+  return sum;
+}
+
 Boundaries::Boundaries(const FluidParams& fluid, const Aabb& domain, double contact_fraction)
     : fluid_(fluid),
       kernel_(fluid.smoothingLength()),
@@ -41,7 +40,7 @@ Boundaries::Boundaries(const FluidParams& fluid, const Aabb& domain, double cont
       spacing_(fluid.spacing()),
       radius_(fluid.particle_radius),
       contact_distance_(contact_fraction * fluid.particle_radius),
-      volume_scale_(spacing_ * spacing_ * spacing_ * flatLatticeKernelSum(kernel_, spacing_)) {
+      volume_scale_(spacing_ * spacing_ * spacing_ * flatLatticeKernelSum(kernel_, spacing_, 0.0)) {
   if (!(contact_fraction > 0.0 && contact_fraction <= 1.0))
     throw std::invalid_argument("Boundaries: contact_fraction must be in (0, 1]");
 }

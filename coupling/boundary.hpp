@@ -407,6 +407,10 @@ class Boundaries {
   /// its neighbours' samples), each scale within [0.5, 2].
   void matchBodyShapes();
   static constexpr int kShapeRounds = 3;
+  /// Sum of W over a flat square lattice of spacing s at `height` from its plane, at the
+  /// foot of a lattice point: at 0, what one boundary sample sees of a flat wall sampled at
+  /// the fluid spacing; at s, what the first fluid layer sees of it.
+  static double flatLatticeKernelSum(const CubicSplineKernel& kernel, double s, double height);
   /// Samples of one body in a grid: the static set (world space) or one moving body
   /// (body space). Sorted by cell.
   struct SampleSet {

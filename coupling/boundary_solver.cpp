@@ -191,11 +191,7 @@ void Boundaries::matchBodyShapes() {
   auto inside = [h](double d) { return std::clamp(0.5 - d / h, 0.0, 1.0); };
   // What a flat face's samples give a spacing from their plane (a fluid particle's radius
   // outside the face): the lattice's missing layer, each sample s^3 (buildSet's volumes).
-  double flat = 0.0;
-  const int plane = static_cast<int>(std::ceil(support / s)) + 1;
-  for (int i = -plane; i <= plane; ++i)
-    for (int j = -plane; j <= plane; ++j)
-      flat += s * s * s * kernel_.value(s * std::sqrt(1.0 + i * i + j * j));
+  const double flat = s * s * s * flatLatticeKernelSum(kernel_, s, s);
   const double support_sq = support * support;
   for (MovingBody& m : moving_) {
     SampleSet& set = m.samples;
