@@ -94,7 +94,7 @@ TEST_P(HeldAtRest, FeelsArchimedesWithoutAOneSidedControl) {
   // mm, 1 s): sphere 0.9992, cube 0.9992 of Archimedes, the control's share under 0.001 of
   // it; a cube resting on the floor (its bottom face dry, addContactPressure) 0.9979, local
   // and global (docs/forces.md). The divergence-free solver keeps its contacts at the full
-  // radius; with its bodies' samples matched to their shapes (Boundaries::calibrateVolumes)
+  // radius; with its bodies' samples matched to their shapes (Boundaries::matchBodyShapes)
   // sphere 1.0035, cube 1.0119, a sphere 3 spacings across 0.9805, at r = 2 mm 0.9840, 0.03-0.11
   // of it from the control (before: sphere 0.950, cube 0.996, 1.031, 0.976).
   const HeldCase& c = GetParam();
@@ -129,7 +129,7 @@ INSTANTIATE_TEST_SUITE_P(
                  true}),
     [](const ::testing::TestParamInfo<HeldCase>& i) { return std::string(i.param.label); });
 
-// The divergence-free solver's cube resting on the floor feels 0.85 of Archimedes (its
+// The divergence-free solver's cube resting on the floor feels 0.82 of Archimedes (its
 // contact face's pressure, docs/forces.md): instantiated disabled.
 INSTANTIATE_TEST_SUITE_P(DISABLED_DfsphOnFloor, HeldAtRest,
                          ::testing::Values(HeldCase{"dfsph_local_cube_on_floor", FluidSolver::Dfsph,
