@@ -12,7 +12,11 @@
 //   D_a = sum_b (v_a - v_b) . g_ab + v_a . G_a - B_a.
 // A pressure term s (= dt p / rho^2, m^5 / (kg s)) changes velocities by
 //   dv_a = -sum_b (s_a + s_b) g_ab - (s_a + s^w_a) G_a,
-// the symmetric SPH pressure force over one step, with the walls' samples at the pressure
+// the symmetric SPH pressure force over one step (for a pressure level s it also pushes
+// -2 s (sum_b g_ab + G_a), zero only where a particle's own density is level: it holds the
+// particles' arrangement with a stiffness in proportion to the pressure, and a slowly moving
+// body under a few centimetres of fluid feels twice its drag; docs/forces.md, "DFSPH's
+// excess drag is the pressure level"), with the walls' samples at the pressure
 // of the fluid around them (as the weakly compressible walls, Boundaries::addWallPressure):
 // s^w_a = (s_a + sum_b w_ab s_b / sum_b w_ab) / 2, w_ab = |g_ab|^2. A sample that mirrored
 // the particle's own pressure alone (s^w_a = s_a) left a particle pressed against a wall
