@@ -10,7 +10,10 @@
 //
 //   wake_bench_solvers [--scene FILE] [--particles N] [--sim-time T] [--threads K]
 //                      [--dfsph-max-dt DT] [--dfsph-cfl L] [--dfsph-max-error E]
-//                      [--solvers wcsph,dfsph] [--skin F] [--interleave T]
+//                      [--solvers wcsph,dfsph,dfsph-consistent] [--skin F] [--interleave T]
+//
+// "dfsph-consistent" is the divergence-free solver with fluid.dfsph.pressure_force
+// "consistent" (coupling/consistent_solve.hpp), with the same step settings as "dfsph".
 //
 // Defaults: bench/spheric2.json at its own resolution (~105k particles), 1 simulated
 // second, 1 thread; the weakly compressible run as the scene has it (its time.cfl and
@@ -57,7 +60,8 @@ struct Options {
 [[noreturn]] void usage(const char* program, const std::string& msg) {
   std::fprintf(stderr,
                "error: %s\nusage: %s [--scene FILE] [--particles N] [--sim-time T] [--threads K]"
-               " [--dfsph-max-dt DT] [--dfsph-cfl L] [--dfsph-max-error E] [--solvers wcsph,dfsph]"
+               " [--dfsph-max-dt DT] [--dfsph-cfl L] [--dfsph-max-error E]"
+               " [--solvers wcsph,dfsph,dfsph-consistent]"
                " [--skin F] [--interleave T]\n",
                msg.c_str(), program);
   std::exit(2);
@@ -100,7 +104,8 @@ Options parse(int argc, char** argv) {
       o.solvers.clear();
       std::stringstream ss(value("--solvers"));
       for (std::string s; std::getline(ss, s, ',');) {
-        if (s != "wcsph" && s != "dfsph") usage(argv[0], "unknown solver " + s);
+        if (s != "wcsph" && s != "dfsph" && s != "dfsph-consistent")
+          usage(argv[0], "unknown solver " + s);
         o.solvers.push_back(s);
       }
     } else
@@ -120,7 +125,7 @@ int main(int argc, char** argv) {
   omp_set_num_threads(opt.threads);
   std::printf("# Wake solver benchmark: %s, %.3g simulated s, %d thread(s)\n", opt.scene.c_str(),
               opt.sim_time, opt.threads);
-  std::printf("%6s %8s %7s %9s %10s %10s %8s %8s %10s %10s %10s %9s %4s\n", "solver", "fluid",
+  std::printf("%16s %8s %7s %9s %10s %10s %8s %8s %10s %10s %10s %9s %4s\n", "solver", "fluid",
               "steps", "wall[s]", "s/sim_s", "ns/p/step", "it/step", "div/step", "ns/p/it",
               "avg_err", "worst_err", "max_rho", "pen");
   // Every solver's world first, then their steps in turns of `interleave` simulated
@@ -146,7 +151,9 @@ int main(int argc, char** argv) {
     }
     Run run;
     run.name = name;
-    run.dfsph = name == "dfsph";
+    run.dfsph = name != "wcsph";
+    if (name == "dfsph-consistent")
+      scene.sim.dfsph.pressure_force = DfsphParams::PressureForce::Consistent;
     if (run.dfsph) {
       scene.sim.solver = FluidSolver::Dfsph;
       scene.sim.max_dt = opt.dfsph_max_dt;
@@ -181,11 +188,13 @@ int main(int argc, char** argv) {
     const double per_iteration = run.dfsph ? 1e9 * sim.timings().solver / n /
                                                  std::max(1.0, steps * (iterations + divergence))
                                            : 0.0;
-    std::printf("%6s %8.0f %7.0f %9.2f %10.2f %10.1f %8.2f %8.2f %10.1f %10.5f %10.5f %9.4f %4zu\n",
-                run.name.c_str(), n, steps, wall, wall / sim.time(), 1e9 * wall / steps / n,
-                iterations, divergence, per_iteration, sim.averageDensityError(),
-                sim.maxStepDensityError(), sim.maxDensityRatio(), sim.maxPenetrating());
-    (run.dfsph ? wall_dfsph : wall_wcsph) = wall;
+    std::printf(
+        "%16s %8.0f %7.0f %9.2f %10.2f %10.1f %8.2f %8.2f %10.1f %10.5f %10.5f %9.4f %4zu\n",
+        run.name.c_str(), n, steps, wall, wall / sim.time(), 1e9 * wall / steps / n, iterations,
+        divergence, per_iteration, sim.averageDensityError(), sim.maxStepDensityError(),
+        sim.maxDensityRatio(), sim.maxPenetrating());
+    if (run.name == "dfsph") wall_dfsph = wall;
+    if (run.name == "wcsph") wall_wcsph = wall;
   }
   // Where each run's time went (Simulation::timings: seconds over the run).
   for (Run& run : runs) {

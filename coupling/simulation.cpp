@@ -198,8 +198,13 @@ Simulation::Simulation(SimulationSettings settings, std::unique_ptr<RigidBodies>
   fluid_->setNeighborSkin(
       s.neighbor_skin >= 0 ? s.neighbor_skin : SolverSettings::kAutoSkin * s.fluid.supportRadius());
   if (s.solver == FluidSolver::Dfsph) dfsph_ = std::make_unique<DivergenceFreeSolver>(s.dfsph);
+  if (dfsph_ && s.dfsph.pressure_force == DfsphParams::PressureForce::Consistent)
+    consistent_ = std::make_unique<ConsistentDensitySolve>();
+  // The contacts where the fluid's own pressure force leaves its first layer: DFSPH's
+  // symmetric impulse holds it a radius off a wall, the consistent force half a radius.
   boundaries_ = std::make_unique<Boundaries>(
-      s.fluid, s.domain, dfsph_ ? Boundaries::kDfsphContactFraction : Boundaries::kContactFraction);
+      s.fluid, s.domain,
+      dfsph_ && !consistent_ ? Boundaries::kDfsphContactFraction : Boundaries::kContactFraction);
   for (const BodySettings& b : s.bodies)
     boundaries_->addBody(b);
   boundaries_->finalize();
@@ -430,7 +435,7 @@ void Simulation::computeFluidForces() {
     // The solver's pressure pushes the bodies where fluid is near; their contact faces, rim
     // included, get the pressure of the water next to them (addContactPressure), from its
     // running mean.
-    if (boundaries_->hasTwoWayBodies()) {
+    if (!consistent_ && boundaries_->hasTwoWayBodies()) {
       boundaries_->computeSamplePressure(*fluid_, work_.placed, model_.gravity, work_.wall_pairs,
                                          work_.sample_pressure, /*two_way_only=*/true);
       boundaries_->addContactPressure(work_.placed, model_.gravity, work_.sample_pressure,
@@ -457,7 +462,9 @@ void Simulation::computeFluidForces() {
     dfsph_->prepare(*fluid_, work_.solver_boundary);
     const double last_dt = data_.run.last_dt > 0 ? data_.run.last_dt : model_.max_dt;
     const auto t_solve = Clock::now();
-    data_.run.divergence_iterations += dfsph_->solveDivergence(*fluid_, last_dt);
+    // The consistent force's solve has no divergence solve: its pressure starts from the
+    // last step's, which already holds the flow's.
+    if (!consistent_) data_.run.divergence_iterations += dfsph_->solveDivergence(*fluid_, last_dt);
     timings_.solver += secondsSince(t_solve);
     fluid_->computeWithoutPressure();
     timings_.forces += secondsSince(t0);
@@ -504,7 +511,31 @@ void Simulation::predict(double dt) {
   auto t0 = Clock::now();
   fluid_->predict(dt);
   timings_.integration += secondsSince(t0);
-  if (dfsph_) {
+  if (consistent_) {
+    // The pressure that brings v* to the rest density at the step's end through the
+    // consistent pressure force, x* from the new v*, and the bodies' pressure force from
+    // their samples at that pressure (contact faces included), as the weakly compressible
+    // fluid's.
+    t0 = Clock::now();
+    double error = 0.0;
+    data_.run.solver_iterations +=
+        consistent_->solve(*fluid_, *boundaries_, work_.placed, model_.gravity, work_.wall_pairs,
+                           work_.solver_boundary, work_.sample_pressure, model_.dfsph, dt, error);
+    FluidState& st = fluid_->state();
+    const double follow = dt / (DivergenceFreeSolver::kPressureMeanTime + dt);
+    const std::int64_t n = static_cast<std::int64_t>(st.size());
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i)
+      st.pressure_mean[i] += follow * (st.pressure[i] - st.pressure_mean[i]);
+    for (Wrench& w : data_.solver_forces)
+      w = Wrench{};
+    fluid_->predictPositions(dt);
+    timings_.solver += secondsSince(t0);
+    t0 = Clock::now();
+    boundaries_->addContactPressure(work_.placed, model_.gravity, work_.sample_pressure);
+    boundaries_->addBodyPressure(work_.placed, work_.sample_pressure, work_.wall_reaction);
+    timings_.boundary += secondsSince(t0);
+  } else if (dfsph_) {
     // The pressure that brings v* to the rest density at the step's end, its push on the
     // two-way bodies, and x* from the new v*.
     t0 = Clock::now();

@@ -7,6 +7,7 @@
 #pragma once
 
 #include "coupling/boundary.hpp"
+#include "coupling/consistent_solve.hpp"
 #include "coupling/direct_forcing.hpp"
 #include "coupling/penalty.hpp"
 #include "coupling/position_correction.hpp"
@@ -335,6 +336,8 @@ class Simulation {
   DirectForcing forcing_;
   std::unique_ptr<PenaltyBoundary> penalty_;     // method Penalty only
   std::unique_ptr<DivergenceFreeSolver> dfsph_;  // solver Dfsph only
+  // solver Dfsph with pressure_force Consistent only: its density solve
+  std::unique_ptr<ConsistentDensitySolve> consistent_;
   double nu_max_ = 0;  // m^2/s, largest kinematic viscosity of the fluid (set at start)
   StepTimings timings_;
   /// Scratch space of the step, reused every step (no state: nothing in it outlives one).

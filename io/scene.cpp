@@ -319,7 +319,7 @@ void readSolver(const ObjectReader& fluid, SimulationSettings& sim) {
   if (sim.solver != FluidSolver::Dfsph)
     dfsph->where().fail("is only used with \"solver\": \"dfsph\" (solver is \"" + solver + "\")");
   dfsph->allowOnly({"max_density_error", "max_divergence_error", "max_iterations",
-                    "max_divergence_iterations", "gradient_correction"});
+                    "max_divergence_iterations", "gradient_correction", "pressure_force"});
   DfsphParams& d = sim.dfsph;
   const DfsphParams defaults = kDefaults.dfsph;
   d.max_density_error =
@@ -334,6 +334,13 @@ void readSolver(const ObjectReader& fluid, SimulationSettings& sim) {
   d.correct_gradient =
       dfsph->choice("gradient_correction", defaults.correct_gradient ? "bulk" : "none",
                     {"bulk", "none"}) == "bulk";
+  d.pressure_force =
+      dfsph->choice("pressure_force",
+                    defaults.pressure_force == DfsphParams::PressureForce::Consistent ? "consistent"
+                                                                                      : "symmetric",
+                    {"symmetric", "consistent"}) == "consistent"
+          ? DfsphParams::PressureForce::Consistent
+          : DfsphParams::PressureForce::Symmetric;
 }
 
 void readFluid(const ObjectReader& fluid, SimulationSettings& sim) {

@@ -141,6 +141,15 @@ struct DfsphParams {
   /// the particles settle in is off by a few per cent (a column at rest: M_yy 0.988 at r = 4
   /// and 5 mm, 1.008 at 5.5 mm), and so is the pressure that holds the fluid up.
   bool correct_gradient = true;
+  /// The pressure force the density solve finds the pressure for. Symmetric: DFSPH's own
+  /// impulses (this file), with the divergence solve and the bodies moving within the solves.
+  /// Consistent: the weakly compressible fluid's consistent pressure force with the
+  /// pressure from a projected Jacobi density solve (coupling/consistent_solve.hpp), no
+  /// divergence solve, the bodies pushed by their samples' pressure after it: a slowly
+  /// moving body's drag within 10 % of the law where the symmetric form gives two to three
+  /// times it (docs/forces.md), at several times the cost per step.
+  enum class PressureForce { Symmetric, Consistent };
+  PressureForce pressure_force = PressureForce::Symmetric;
 };
 
 /// Iterations and errors of one step's solves.

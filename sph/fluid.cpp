@@ -487,12 +487,20 @@ void Fluid::computeFluidDensity() {
 }
 
 void Fluid::computePressure() {
+  pressureTerms(true);
+}
+
+void Fluid::computePressureFromState() {
+  pressureTerms(false);
+}
+
+void Fluid::pressureTerms(bool from_density) {
   const std::int64_t n = static_cast<std::int64_t>(state_.size());
   inv_rho_.resize(state_.size());
   pressure_term_ = true;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
-    state_.pressure[i] = params_.pressure(state_.density[i]);
+    if (from_density) state_.pressure[i] = params_.pressure(state_.density[i]);
     inv_rho_[i] = 1.0 / state_.density[i];
   }
   if (params_.pressure_gradient != PressureGradient::Consistent) {

@@ -245,6 +245,10 @@ class Fluid {
   /// one that vanishes r beyond it (see raiseSurfacePressure), the pressure references, and
   /// the walls' sums cleared (wallPressureSums).
   void computePressure();
+  /// computePressure with the state's pressure as it is instead of Tait's (a pressure
+  /// solver's, coupling/consistent_solve.hpp): the free surface's raise, the references and
+  /// the walls' sums cleared, the densities' 1 / rho; the pressure term on.
+  void computePressureFromState();
   /// PressureGradient::Consistent's constants (computeAccelerations, raiseSurfacePressure;
   /// docs/forces.md has the measurements that chose them).
   static constexpr double kRepulsion = 0.3;
@@ -364,6 +368,8 @@ class Fluid {
 
   bool wide_lanes_ = hasWideLanes();
 
+  /// computePressure and computePressureFromState: the pressure from Tait's equation or as it is.
+  void pressureTerms(bool from_density);
   /// PressureGradient::Consistent, after the equation of state: a particle at the free
   /// surface (density < kSurfaceDensity rho0 and |sum_b V_b grad W_ab| H > kSurfaceColour)
   /// gets at least the pressure that vanishes r beyond it along its outward normal n (minus

@@ -59,12 +59,19 @@ TEST(SceneLoader, DivergenceFreeSolverAndItsSettings) {
   EXPECT_EQ(s.sim.dfsph.max_divergence_error, d.max_divergence_error);
   EXPECT_EQ(s.sim.dfsph.max_iterations, d.max_iterations);
   EXPECT_TRUE(s.sim.dfsph.correct_gradient);  // "bulk", the default
+  EXPECT_EQ(s.sim.dfsph.pressure_force, DfsphParams::PressureForce::Symmetric);  // the default
   EXPECT_EQ(s.sim.cfl, 0.6);
   const SceneFile off = parseScene(R"({"time": {"end": 1},
       "fluid": {"particle_radius": 0.01, "solver": "dfsph", "dfsph": {"gradient_correction": "none"},
                 "blocks": [{"min": [0, 0, 0], "max": [1, 1, 1]}]}})",
                                    "plain.json");
   EXPECT_FALSE(off.sim.dfsph.correct_gradient);
+  const SceneFile consistent = parseScene(R"({"time": {"end": 1},
+      "fluid": {"particle_radius": 0.01, "solver": "dfsph",
+                "dfsph": {"pressure_force": "consistent"},
+                "blocks": [{"min": [0, 0, 0], "max": [1, 1, 1]}]}})",
+                                          "consistent.json");
+  EXPECT_EQ(consistent.sim.dfsph.pressure_force, DfsphParams::PressureForce::Consistent);
 }
 
 TEST(SceneLoader, SmallDambreak) {
@@ -455,6 +462,12 @@ const BadCase kBadCases[] = {
        s["fluid"]["dfsph"] = {{"gradient_correction", "local"}};
      },
      "fluid.dfsph.gradient_correction: ", "unknown value \"local\""},
+    {"dfsph unknown pressure force",
+     [](json& s) {
+       s["fluid"]["solver"] = "dfsph";
+       s["fluid"]["dfsph"] = {{"pressure_force", "difference"}};
+     },
+     "fluid.dfsph.pressure_force: ", "unknown value \"difference\""},
     {"dfsph iterations not whole",
      [](json& s) {
        s["fluid"]["solver"] = "dfsph";

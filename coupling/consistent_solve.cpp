@@ -1,0 +1,114 @@
+#include "coupling/consistent_solve.hpp"
+
+#include "sph/pair_loops.hpp"
+
+#include <algorithm>
+#include <cstdint>
+
+namespace wake {
+
+int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
+                                  const BodyPlacement& at, const Vec3& gravity, WallPairs& pairs,
+                                  const SolverBoundary& walls, SamplePressure& samples,
+                                  const DfsphParams& params, double dt, double& error) {
+  FluidState& st = fluid.state();
+  st.keepPressureMean();
+  const std::size_t un = st.size();
+  const std::int64_t n = static_cast<std::int64_t>(un);
+  error = 0.0;
+  if (un == 0) return 0;
+  const double rho0 = fluid.params().rest_density;
+  const double mass = fluid.particleMass();
+  const CubicSplineKernel& kernel = fluid.kernel();
+  const PairLists& lists = fluid.neighbors();
+  const bool walled = walls.gradient.size() == un;
+  const Vec3* x = st.position.data();
+  const double inv_dt2 = 1.0 / (dt * dt);
+
+  predicted_ = st.velocity;
+  // The viscous accelerations of v* (no pressure, no gravity): what each a(p) below also
+  // holds, taken off to leave the pressure's.
+  fluid.computeWithoutPressure();
+  no_extra_.clear();
+  fluid.computeAccelerations(Vec3::Zero(), no_extra_, nullptr);
+  viscous_ = st.acceleration;
+
+  // a_a = 1 / (|sum_b g_ab + G_a|^2 + sum_b |g_ab|^2).
+  std::vector<Vec3> gradient_sum(un, Vec3::Zero());
+  factor_.assign(un, 0.0);
+  forEachPairOnce(lists, [&](std::size_t i, std::uint32_t j, bool both) {
+    const Vec3 g = mass * kernel.gradient(x[i] - x[j]);
+    const double g2 = g.squaredNorm();
+    gradient_sum[i] += g;
+    factor_[i] += g2;
+    if (both) {
+      gradient_sum[j] -= g;
+      factor_[j] += g2;
+    }
+  });
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i) {
+    const Vec3 g = gradient_sum[i] + (walled ? walls.gradient[i] : Vec3(Vec3::Zero()));
+    const double d = g.squaredNorm() + factor_[i];
+    factor_[i] = d > 0.0 ? 1.0 / d : 0.0;
+  }
+
+  pressure_.resize(un);
+  for (std::size_t i = 0; i < un; ++i)
+    pressure_[i] = std::max(0.0, st.pressure[i]);
+  velocity_.resize(un);
+  rate_.resize(un);
+  step_.resize(un);
+  wall_unused_.assign(un, Vec3::Zero());
+  int iterations = 0;
+  for (;; ++iterations) {
+    // The pressure's accelerations with p: WCSPH's path from the pressure on.
+    st.pressure = pressure_;
+    fluid.computePressureFromState();
+    boundaries.computeSamplePressure(fluid, at, gravity, pairs, samples);
+    boundaries.addWallPressure(fluid, at, pairs, samples, wall_unused_, fluid.wallPressureSums());
+    fluid.computeAccelerations(Vec3::Zero(), no_extra_, nullptr);
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i) {
+      velocity_[i] = predicted_[i] + dt * (st.acceleration[i] - viscous_[i]);
+      rate_[i] = 0.0;
+    }
+    forEachPairOnce(lists, [&](std::size_t i, std::uint32_t j, bool both) {
+      const Vec3 g = mass * kernel.gradient(x[i] - x[j]);
+      const double r = (velocity_[i] - velocity_[j]).dot(g);
+      rate_[i] += r;
+      if (both) rate_[j] += r;
+    });
+    // Each particle's deviation at the step's end: compression always, expansion while it
+    // has pressure to give up.
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i) {
+      double rate = rate_[i];
+      if (walled) rate += velocity_[i].dot(walls.gradient[i]) - walls.flux[i];
+      const double rho = st.density[i];
+      const double deviation = rho + dt * rate - rho0;
+      const double gain = rho * rho * factor_[i] * inv_dt2;  // Pa per unit of density
+      double counted = 0.0;
+      if (deviation > 0.0)
+        counted = deviation;
+      else if (st.pressure[i] > 0.0 && gain > 0.0)
+        counted = -std::min(-deviation, st.pressure[i] / gain);
+      step_[i] = counted * gain;
+      rate_[i] = std::abs(counted);
+    }
+    double sum = 0.0;  // in particle order: the same bits on any number of threads
+    for (std::size_t i = 0; i < un; ++i)
+      sum += rate_[i];
+    error = sum / (double(un) * rho0);
+    if ((error <= params.max_density_error && iterations >= 2) ||
+        iterations >= params.max_iterations)
+      break;
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i)
+      pressure_[i] = std::max(0.0, st.pressure[i] + kRelaxation * step_[i]);
+  }
+  st.velocity = velocity_;
+  return iterations;
+}
+
+}  // namespace wake
