@@ -24,6 +24,9 @@ int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
   const bool walled = walls.gradient.size() == un;
   const Vec3* x = st.position.data();
   const double inv_dt2 = 1.0 / (dt * dt);
+  // The fluid's compliance d rho / d p: the linearised equation of state's 1 / c^2.
+  const double sound = fluid.params().speed_of_sound;
+  const double compliance = 1.0 / (sound * sound);
 
   predicted_ = st.velocity;
   // The viscous accelerations of v* (no pressure, no gravity): what each a(p) below also
@@ -86,8 +89,10 @@ int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
       double rate = rate_[i];
       if (walled) rate += velocity_[i].dot(walls.gradient[i]) - walls.flux[i];
       const double rho = st.density[i];
-      const double deviation = rho + dt * rate - rho0;
-      const double gain = rho * rho * factor_[i] * inv_dt2;  // Pa per unit of density
+      const double deviation = rho + dt * rate - rho0 - compliance * st.pressure[i];
+      // Pa per unit of density: the pressure's own response, and the compliance's
+      const double response = rho * rho * factor_[i] * inv_dt2;
+      const double gain = response > 0.0 ? response / (1.0 + compliance * response) : 0.0;
       double counted = 0.0;
       if (deviation > 0.0)
         counted = deviation;

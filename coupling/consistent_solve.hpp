@@ -9,21 +9,33 @@
 // fluid's force instead (Fluid::computeAccelerations with PressureGradient::Consistent: the
 // gradient corrected by each particle's moment, the walls' samples at the pressure the fluid
 // has there, Boundaries::computeSamplePressure, and a repulsion in proportion to the
-// pressure's variation over a support only), and the pressure is the one that brings the
-// predicted velocities v* to the rest density at the step's end: a projected Jacobi solve of
-//   p >= 0,  rho*_a = rho_a + dt D_a(v* + dt a^p(p)) <= rho0,  p_a (rho*_a - rho0) = 0,
+// pressure's variation over a support only), and the pressure is found implicitly: the
+// pressure whose accelerations bring the predicted velocities v* to the density the
+// fluid's equation of state gives that pressure at the step's end (backward Euler of
+// WCSPH's equation of state, linearised: rho0 + p / c^2, c the fluid's speed of sound), in
+// a projected Jacobi solve of
+//   p >= 0,  e_a = rho_a + dt D_a(v* + dt a^p(p)) - rho0 - p_a / c^2 <= 0,  p_a e_a = 0,
 // D_a = sum_b (v_a - v_b) . g_ab + v_a . G_a - B_a (sph/dfsph.hpp). Each iteration computes
 // the pressure's accelerations a^p of the whole field, the rates, and moves each p_a by
-// omega (rho*_a - rho0) rho_a^2 a_a / dt^2, a_a = 1 / (|sum_b g_ab + G_a|^2 + sum_b |g_ab|^2)
-// (the symmetric form's own response, a bound on the consistent one's), never below 0; a
-// particle that would end below the rest density gives up pressure it has, as one above
-// takes more. It starts from the last step's pressure. The bodies' pressure force is their
-// samples' pressure (Boundaries::addBodyPressure), as with WCSPH; they see the solve's
-// pressure after it, not within it.
+// omega e_a k_a, k_a = s_a / (1 + s_a / c^2), s_a = rho_a^2 a_a / dt^2 and a_a = 1 /
+// (|sum_b g_ab + G_a|^2 + sum_b |g_ab|^2) (the symmetric form's own response; measured in a
+// tank, the consistent operator's diagonal is 0.98-1.09 of it), never below 0; a particle
+// with e_a < 0 gives up pressure it has, as one with e_a > 0 takes more. It starts from the
+// last step's pressure. The bodies' pressure force is their samples' pressure
+// (Boundaries::addBodyPressure), as with WCSPH; they see the solve's pressure after it, not
+// within it.
 //
-// Experimental: in two of the scenes tried (a sphere held at r = 2 mm with 1 ms steps, a
-// sphere settling at Re 10) the iterations often ran to max_iterations, the pressure came in
-// kicks several times the hydrostatic and the fluid blew up; the cause is not known.
+// Why the compliance p / c^2: without it (the rest density itself, as DFSPH's own density
+// solve) the solve was unstable. The consistent force gives a uniformly raised pressure no
+// effect but at the free surface, so a column's pressure level is nearly free: in a tank at
+// rest the solve ran to max_iterations, the level rose to three times the hydrostatic over
+// thousands of particles and the column bounced; a settling sphere and a held one blew up
+// (docs/forces.md, "DFSPH with the consistent pressure force"). With the compliance a
+// pressure level needs the compression the equation of state gives it, as with WCSPH, so
+// it cannot run away (that tank: 10.6 iterations per step instead of 38, its largest
+// density ratio 1.06-1.11 instead of 1.09-1.10 with kicks); the fluid is then as
+// compressible as WCSPH's with the same c (the tank's "auto" c, 22.6 m/s: 0.23 % at the
+// bottom of its 12 cm), while the step is not bound by c.
 #pragma once
 
 #include "coupling/boundary.hpp"
