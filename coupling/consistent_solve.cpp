@@ -29,6 +29,9 @@ int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
   const double compliance = 1.0 / (sound * sound);
 
   predicted_ = st.velocity;
+  // The step-start velocities (the control's restitution reads them): the accelerations
+  // below overwrite the fluid's copy.
+  start_.assign(fluid.stepStartVelocities(), fluid.stepStartVelocities() + un);
   // The viscous accelerations of v* (no pressure, no gravity): what each a(p) below also
   // holds, taken off to leave the pressure's.
   fluid.computeWithoutPressure();
@@ -56,9 +59,17 @@ int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
     factor_[i] = d > 0.0 ? 1.0 / d : 0.0;
   }
 
+  // The start: the pressure the equation of state gives the density now, c^2 (rho_a -
+  // rho0), not the last step's pressure. With the compliance the density holds the pressure
+  // (a converged step leaves rho_a = rho0 + p_a / c^2), so the two differ by what the last
+  // solve left unconverged; starting from the last pressure carries that part over as a
+  // pressure lagging the motion, which pumps the slow modes the few iterations leave (a
+  // column at rest bounced at 4 cm/s; docs/forces.md, "A column that would not come to
+  // rest"). From the state, the unconverged part is the weakly compressible fluid's explicit
+  // pressure: stable for modes slower than the step, and the fast ones converge first.
   pressure_.resize(un);
   for (std::size_t i = 0; i < un; ++i)
-    pressure_[i] = std::max(0.0, st.pressure[i]);
+    pressure_[i] = std::max(0.0, (st.density[i] - rho0) / compliance);
   velocity_.resize(un);
   rate_.resize(un);
   step_.resize(un);
@@ -113,6 +124,7 @@ int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
       pressure_[i] = std::max(0.0, st.pressure[i] + kRelaxation * step_[i]);
   }
   st.velocity = velocity_;
+  fluid.restoreStepStartVelocities(start_);
   return iterations;
 }
 

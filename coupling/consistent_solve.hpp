@@ -21,9 +21,10 @@
 // (|sum_b g_ab + G_a|^2 + sum_b |g_ab|^2) (the symmetric form's own response; measured in a
 // tank, the consistent operator's diagonal is 0.98-1.09 of it), never below 0; a particle
 // with e_a < 0 gives up pressure it has, as one with e_a > 0 takes more. It starts from the
-// last step's pressure. The bodies' pressure force is their samples' pressure
-// (Boundaries::addBodyPressure), as with WCSPH; they see the solve's pressure after it, not
-// within it.
+// pressure the equation of state gives the density at the step's start, max(0, c^2 (rho_a -
+// rho0)), not from the last step's pressure (the .cpp says why). The bodies' pressure force is
+// their samples' pressure (Boundaries::addBodyPressure), as with WCSPH; they see the solve's
+// pressure after it, not within it.
 //
 // Why the compliance p / c^2: without it (the rest density itself, as DFSPH's own density
 // solve) the solve was unstable. The consistent force gives a uniformly raised pressure no
@@ -62,7 +63,7 @@ class ConsistentDensitySolve {
             SamplePressure& samples, const DfsphParams& params, double dt, double& error);
 
  private:
-  std::vector<Vec3> predicted_, viscous_, velocity_, no_extra_, wall_unused_;
+  std::vector<Vec3> predicted_, start_, viscous_, velocity_, no_extra_, wall_unused_;
   std::vector<double> pressure_, factor_, rate_, step_;
 };
 

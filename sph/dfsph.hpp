@@ -146,9 +146,9 @@ struct DfsphParams {
   /// Consistent (experimental): the weakly compressible fluid's consistent pressure force
   /// with the pressure from a projected Jacobi solve for the density its equation of state
   /// gives (rho0 + p / c^2; coupling/consistent_solve.hpp), no divergence solve, the bodies
-  /// pushed by their samples' pressure after it: a slowly moving body's drag within about
-  /// 10 % of the law where the symmetric form gives two to three times it, at about 5.5
-  /// times the cost per step (docs/forces.md, "DFSPH with the consistent pressure force").
+  /// pushed by their samples' pressure after it: a slowly moving body's drag within 4 % of
+  /// the law at r = 1.5 mm where the symmetric form gives two to three times it, at about
+  /// 5 times the cost per step (docs/forces.md, "DFSPH with the consistent pressure force").
   enum class PressureForce { Symmetric, Consistent };
   PressureForce pressure_force = PressureForce::Symmetric;
 };

@@ -1004,6 +1004,13 @@ void Fluid::predictPositions(double dt) {
     x_pred[i] = st.position[i] + dt * st.velocity[i];
 }
 
+void Fluid::restoreStepStartVelocities(const std::vector<Vec3>& v) {
+  const std::size_t n = state_.size();
+  if (v.size() != n)
+    throw std::invalid_argument("restoreStepStartVelocities: one velocity per particle");
+  std::copy(v.begin(), v.end(), step_.view<Vec3>(0, 2 * n));
+}
+
 void Fluid::integratePositions(double dt) {
   FluidState& st = state_;
   const std::int64_t n = static_cast<std::int64_t>(st.size());

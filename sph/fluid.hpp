@@ -313,6 +313,10 @@ class Fluid {
   void predict(double dt);
   /// x* = x + dt v (predictedPositions) with the velocities as they are now.
   void predictPositions(double dt);
+  /// Writes `v` (one per particle) back as the step-start velocities (stepStartVelocities),
+  /// for a caller whose computeAccelerations after predict() overwrote them (DFSPH's
+  /// consistent density solve: the control's restitution reads them).
+  void restoreStepStartVelocities(const std::vector<Vec3>& v);
   /// (n) The velocities before the last predict(), and the positions it (or
   /// predictPositions) predicted: valid until the next computeAccelerations, whose scratch
   /// holds them.

@@ -136,27 +136,19 @@ INSTANTIATE_TEST_SUITE_P(
     [](const ::testing::TestParamInfo<HeldCase>& i) { return std::string(i.param.label); });
 
 // The divergence-free solver with the consistent pressure force (the sphere in CI; the
-// others, about a minute each on one thread, slow).
+// others, 30-90 s each on one thread, slow).
 INSTANTIATE_TEST_SUITE_P(
     ConsistentDfsph, HeldAtRest,
     ::testing::Values(HeldCase{"local_sphere", FluidSolver::Dfsph, CouplingMethod::Local, true,
                                false, 0.0125, 0.0025, true},
                       HeldCase{"global_cube", FluidSolver::Dfsph, CouplingMethod::Global, false,
                                false, 0.0125, 0.0025, true},
+                      HeldCase{"global_sphere_3_spacings", FluidSolver::Dfsph,
+                               CouplingMethod::Global, true, false, 0.0075, 0.0025, true},
                       HeldCase{"local_sphere_r_2mm", FluidSolver::Dfsph, CouplingMethod::Local,
                                true, false, 0.0125, 0.002, true},
                       HeldCase{"local_cube_on_floor", FluidSolver::Dfsph, CouplingMethod::Local,
                                false, true, 0.0125, 0.0025, true}),
-    [](const ::testing::TestParamInfo<HeldCase>& i) { return std::string(i.param.label); });
-
-// A sphere three spacings across feels 0.9818 of Archimedes with the consistent force's
-// compliant solve (0.9977 with the earlier solve to the rest density, which was unstable
-// elsewhere; docs/forces.md, "DFSPH with the consistent pressure force"): instantiated
-// disabled.
-INSTANTIATE_TEST_SUITE_P(
-    DISABLED_ConsistentDfsph, HeldAtRest,
-    ::testing::Values(HeldCase{"global_sphere_3_spacings", FluidSolver::Dfsph,
-                               CouplingMethod::Global, true, false, 0.0075, 0.0025, true}),
     [](const ::testing::TestParamInfo<HeldCase>& i) { return std::string(i.param.label); });
 
 // The divergence-free solver's cube resting on the floor feels 0.82 of Archimedes (its

@@ -196,7 +196,8 @@ void trace(const Simulation& sim, double t) {
 }
 
 /// Cases first .. first + cases - 1 (WAKE_PROPERTY_CASES, WAKE_PROPERTY_SEED and
-/// WAKE_PROPERTY_DENSITY_MIN / _MAX replace the defaults).
+/// WAKE_PROPERTY_DENSITY_MIN / _MAX replace the defaults; WAKE_PROPERTY_DFSPH_CONSISTENT=1
+/// gives the divergence-free cases the consistent pressure force).
 void runCases(CouplingMethod method, FluidSolver solver = FluidSolver::Wcsph, int default_cases = 3,
               int default_seed = 1, double lightest = 0.2, double heaviest = 3.0) {
   const int cases = envInt("WAKE_PROPERTY_CASES", default_cases);
@@ -212,6 +213,10 @@ void runCases(CouplingMethod method, FluidSolver solver = FluidSolver::Wcsph, in
       c.sim.cfl = envDouble("WAKE_PROPERTY_DFSPH_CFL", 0.6);
       c.sim.max_dt = envDouble("WAKE_PROPERTY_DFSPH_MAX_DT", 4e-3);
       c.text += " dfsph;";
+      if (envInt("WAKE_PROPERTY_DFSPH_CONSISTENT", 0)) {
+        c.sim.dfsph.pressure_force = DfsphParams::PressureForce::Consistent;
+        c.text += " consistent;";
+      }
     }
     SceneWorld world(c.sim, c.bodies);
     std::size_t steps_checked = 0;
