@@ -482,27 +482,31 @@ void expectReboundOnlyWithRestitution(
 
 }  // namespace
 
+namespace {
+
+/// The dropped fluid of the restitution tests: one particle from 5 cm; a block one particle
+/// thick (8 x 1 x 8), every particle of which meets the floor, so the block's rebound is the
+/// boundary's restitution (in thicker blocks only the touching layer is reflected and the
+/// fluid's own pressure response dominates the rebound); one particle from 30 cm, which at
+/// 2.4 m/s crosses the contact distance within one step, its predicted position already in
+/// the floor, where the contact found still reflects the approach speed it had at the
+/// step's start (run for 0.35 s).
+const FluidBlock kOneParticle{Vec3(-0.005, 0.05, -0.005), Vec3(0.005, 0.06, 0.005), Vec3::Zero()};
+const FluidBlock kSheet{Vec3(-0.04, 0.03, -0.04), Vec3(0.04, 0.04, 0.04), Vec3::Zero()};
+const FluidBlock kFastParticle{Vec3(-0.005, 0.3, -0.005), Vec3(0.005, 0.31, 0.005), Vec3::Zero()};
+
+}  // namespace
+
 TEST_P(Restitution, SingleParticleBouncesOnlyWithRestitution) {
-  expectReboundOnlyWithRestitution(
-      solver(), "one particle",
-      {Vec3(-0.005, 0.05, -0.005), Vec3(0.005, 0.06, 0.005), Vec3::Zero()});
+  expectReboundOnlyWithRestitution(solver(), "one particle", kOneParticle);
 }
 
 TEST_P(Restitution, ParticleSheetReboundsWithDeltaOneAndNotWithZero) {
-  // A block one particle thick (8 x 1 x 8): every particle meets the floor, so the block's
-  // rebound is the boundary's restitution. (In thicker blocks only the touching layer is
-  // reflected and the fluid's own pressure response dominates the rebound.)
-  expectReboundOnlyWithRestitution(
-      solver(), "sheet", {Vec3(-0.04, 0.03, -0.04), Vec3(0.04, 0.04, 0.04), Vec3::Zero()});
+  expectReboundOnlyWithRestitution(solver(), "sheet", kSheet);
 }
 
 TEST_P(Restitution, FastParticleThatReachesTheFloorWithinAStepBouncesOnlyWithRestitution) {
-  // Dropped from 30 cm: at 2.4 m/s it crosses the contact distance within one step, its
-  // predicted position already in the floor; the contact found there still reflects the
-  // approach speed it had at the step's start.
-  expectReboundOnlyWithRestitution(
-      solver(), "fast particle",
-      {Vec3(-0.005, 0.3, -0.005), Vec3(0.005, 0.31, 0.005), Vec3::Zero()}, 0.35);
+  expectReboundOnlyWithRestitution(solver(), "fast particle", kFastParticle, 0.35);
 }
 
 /// DFSPH with the consistent pressure force: its density solve takes the fluid's
@@ -510,15 +514,12 @@ TEST_P(Restitution, FastParticleThatReachesTheFloorWithinAStepBouncesOnlyWithRes
 /// step-start velocities that restitution reflects (a particle stopped dead at the floor).
 TEST(RestitutionConsistentDfsph, ParticlesBounceOnlyWithRestitution) {
   const auto consistent = DfsphParams::PressureForce::Consistent;
-  expectReboundOnlyWithRestitution(
-      FluidSolver::Dfsph, "one particle, consistent",
-      {Vec3(-0.005, 0.05, -0.005), Vec3(0.005, 0.06, 0.005), Vec3::Zero()}, 0.2, consistent);
-  expectReboundOnlyWithRestitution(
-      FluidSolver::Dfsph, "fast particle, consistent",
-      {Vec3(-0.005, 0.3, -0.005), Vec3(0.005, 0.31, 0.005), Vec3::Zero()}, 0.35, consistent);
-  expectReboundOnlyWithRestitution(FluidSolver::Dfsph, "sheet, consistent",
-                                   {Vec3(-0.04, 0.03, -0.04), Vec3(0.04, 0.04, 0.04), Vec3::Zero()},
+  expectReboundOnlyWithRestitution(FluidSolver::Dfsph, "one particle, consistent", kOneParticle,
                                    0.2, consistent);
+  expectReboundOnlyWithRestitution(FluidSolver::Dfsph, "fast particle, consistent", kFastParticle,
+                                   0.35, consistent);
+  expectReboundOnlyWithRestitution(FluidSolver::Dfsph, "sheet, consistent", kSheet, 0.2,
+                                   consistent);
 }
 
 TEST_P(Solvers, WaterInATankWithoutGravityStaysAtRest) {
