@@ -9,8 +9,9 @@ namespace wake {
 
 int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
                                   const BodyPlacement& at, const Vec3& gravity, WallPairs& pairs,
-                                  const SolverBoundary& walls, SamplePressure& samples,
-                                  const DfsphParams& params, double dt, double& error) {
+                                  const SolverBoundary& walls, const PairDerivatives& derivatives,
+                                  SamplePressure& samples, const DfsphParams& params, double dt,
+                                  double& error) {
   FluidState& st = fluid.state();
   st.keepPressureMean();
   const std::size_t un = st.size();
@@ -19,7 +20,6 @@ int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
   if (un == 0) return 0;
   const double rho0 = fluid.params().rest_density;
   const double mass = fluid.particleMass();
-  const CubicSplineKernel& kernel = fluid.kernel();
   const PairLists& lists = fluid.neighbors();
   const bool walled = walls.gradient.size() == un;
   const Vec3* x = st.position.data();
@@ -28,33 +28,32 @@ int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
   const double sound = fluid.params().speed_of_sound;
   const double compliance = 1.0 / (sound * sound);
 
+  if (derivatives.later.size() != lists.ranges() || derivatives.before.size() != lists.ranges())
+    throw std::invalid_argument("ConsistentDensitySolve: derivatives of other pair lists");
+  // g_ab = m grad_a W_ab from each pair's stored W'(r) / r (no square root and kernel per
+  // pair; the product kernel.gradient takes).
+  auto gradient = [&](std::size_t i, std::uint32_t j, double dwr) {
+    return Vec3(mass * ((x[i] - x[j]) * dwr));
+  };
   predicted_ = st.velocity;
-  // The step-start velocities (the control's restitution reads them): the accelerations
-  // below overwrite the fluid's copy.
-  start_.assign(fluid.stepStartVelocities(), fluid.stepStartVelocities() + un);
-  // The viscous accelerations of v* (no pressure, no gravity): what each a(p) below also
-  // holds, taken off to leave the pressure's.
-  fluid.computeWithoutPressure();
-  no_extra_.clear();
-  fluid.computeAccelerations(Vec3::Zero(), no_extra_, nullptr);
-  viscous_ = st.acceleration;
 
   // a_a = 1 / (|sum_b g_ab + G_a|^2 + sum_b |g_ab|^2).
-  std::vector<Vec3> gradient_sum(un, Vec3::Zero());
+  gradient_sum_.assign(un, Vec3::Zero());
   factor_.assign(un, 0.0);
-  forEachPairOnce(lists, [&](std::size_t i, std::uint32_t j, bool both) {
-    const Vec3 g = mass * kernel.gradient(x[i] - x[j]);
-    const double g2 = g.squaredNorm();
-    gradient_sum[i] += g;
-    factor_[i] += g2;
-    if (both) {
-      gradient_sum[j] -= g;
-      factor_[j] += g2;
-    }
-  });
+  forEachPairOnceWith(lists, derivatives.later, derivatives.before,
+                      [&](std::size_t i, std::uint32_t j, bool both, double dwr) {
+                        const Vec3 g = gradient(i, j, dwr);
+                        const double g2 = g.squaredNorm();
+                        gradient_sum_[i] += g;
+                        factor_[i] += g2;
+                        if (both) {
+                          gradient_sum_[j] -= g;
+                          factor_[j] += g2;
+                        }
+                      });
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
-    const Vec3 g = gradient_sum[i] + (walled ? walls.gradient[i] : Vec3(Vec3::Zero()));
+    const Vec3 g = gradient_sum_[i] + (walled ? walls.gradient[i] : Vec3(Vec3::Zero()));
     const double d = g.squaredNorm() + factor_[i];
     factor_[i] = d > 0.0 ? 1.0 / d : 0.0;
   }
@@ -76,23 +75,25 @@ int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
   wall_unused_.assign(un, Vec3::Zero());
   int iterations = 0;
   for (;; ++iterations) {
-    // The pressure's accelerations with p: WCSPH's path from the pressure on.
+    // The pressure's accelerations with p: WCSPH's path from the pressure on (the free
+    // surface found once: the positions and densities are the step's throughout).
     st.pressure = pressure_;
-    fluid.computePressureFromState();
+    fluid.computePressureFromState(/*same_surface=*/iterations > 0);
     boundaries.computeSamplePressure(fluid, at, gravity, pairs, samples);
     boundaries.addWallPressure(fluid, at, pairs, samples, wall_unused_, fluid.wallPressureSums());
-    fluid.computeAccelerations(Vec3::Zero(), no_extra_, nullptr);
+    fluid.computePressureAccelerations(&derivatives);
 #pragma omp parallel for schedule(static)
     for (std::int64_t i = 0; i < n; ++i) {
-      velocity_[i] = predicted_[i] + dt * (st.acceleration[i] - viscous_[i]);
+      velocity_[i] = predicted_[i] + dt * st.acceleration[i];
       rate_[i] = 0.0;
     }
-    forEachPairOnce(lists, [&](std::size_t i, std::uint32_t j, bool both) {
-      const Vec3 g = mass * kernel.gradient(x[i] - x[j]);
-      const double r = (velocity_[i] - velocity_[j]).dot(g);
-      rate_[i] += r;
-      if (both) rate_[j] += r;
-    });
+    forEachPairOnceWith(lists, derivatives.later, derivatives.before,
+                        [&](std::size_t i, std::uint32_t j, bool both, double dwr) {
+                          const Vec3 g = gradient(i, j, dwr);
+                          const double r = (velocity_[i] - velocity_[j]).dot(g);
+                          rate_[i] += r;
+                          if (both) rate_[j] += r;
+                        });
     // Each particle's deviation at the step's end: compression always, expansion while it
     // has pressure to give up.
 #pragma omp parallel for schedule(static)
@@ -124,7 +125,6 @@ int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
       pressure_[i] = std::max(0.0, st.pressure[i] + kRelaxation * step_[i]);
   }
   st.velocity = velocity_;
-  fluid.restoreStepStartVelocities(start_);
   return iterations;
 }
 

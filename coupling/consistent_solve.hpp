@@ -56,14 +56,18 @@ class ConsistentDensitySolve {
   /// force in them) and applies its accelerations over dt to them; the state's pressure is
   /// the pressure found (with the free surface's raise, Fluid::computePressureFromState),
   /// `samples` the walls' and bodies' samples' pressure for it. `walls`: this step's
-  /// Boundaries::solverTerms (G_a, B_a; empty without boundaries). `viscous`: scratch.
-  /// Returns the iterations; `error` the last average of the deviations counted (fraction).
+  /// Boundaries::solverTerms (G_a, B_a; empty without boundaries). `derivatives`: W'(r) / r
+  /// of the fluid's pair lists as they are (DivergenceFreeSolver::pairDerivatives). Leaves
+  /// the fluid's step scratch (the step-start velocities the control's restitution reads)
+  /// as it is. Returns the iterations; `error` the last average of the deviations counted
+  /// (fraction).
   int solve(Fluid& fluid, const Boundaries& boundaries, const BodyPlacement& at,
             const Vec3& gravity, WallPairs& pairs, const SolverBoundary& walls,
-            SamplePressure& samples, const DfsphParams& params, double dt, double& error);
+            const PairDerivatives& derivatives, SamplePressure& samples, const DfsphParams& params,
+            double dt, double& error);
 
  private:
-  std::vector<Vec3> predicted_, start_, viscous_, velocity_, no_extra_, wall_unused_;
+  std::vector<Vec3> predicted_, velocity_, wall_unused_, gradient_sum_;
   std::vector<double> pressure_, factor_, rate_, step_;
 };
 

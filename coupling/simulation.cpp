@@ -520,7 +520,8 @@ void Simulation::predict(double dt) {
     double error = 0.0;
     data_.run.solver_iterations +=
         consistent_->solve(*fluid_, *boundaries_, work_.placed, model_.gravity, work_.wall_pairs,
-                           work_.solver_boundary, work_.sample_pressure, model_.dfsph, dt, error);
+                           work_.solver_boundary, dfsph_->pairDerivatives(), work_.sample_pressure,
+                           model_.dfsph, dt, error);
     FluidState& st = fluid_->state();
     const double follow = dt / (DivergenceFreeSolver::kPressureMeanTime + dt);
     const std::int64_t n = static_cast<std::int64_t>(st.size());

@@ -490,11 +490,11 @@ void Fluid::computePressure() {
   pressureTerms(true);
 }
 
-void Fluid::computePressureFromState() {
-  pressureTerms(false);
+void Fluid::computePressureFromState(bool same_surface) {
+  pressureTerms(false, same_surface);
 }
 
-void Fluid::pressureTerms(bool from_density) {
+void Fluid::pressureTerms(bool from_density, bool same_surface) {
   const std::int64_t n = static_cast<std::int64_t>(state_.size());
   inv_rho_.resize(state_.size());
   pressure_term_ = true;
@@ -512,12 +512,13 @@ void Fluid::pressureTerms(bool from_density) {
   wall_sums_.moment.assign(un, std::array<double, 6>{});
   wall_sums_.spread.assign(un, Vec3::Zero());
   wall_sums_.symmetric.assign(un, Vec3::Zero());
-  surface_.clear();
   if (neighbors_.size() != un) {  // no lists yet: each particle's own pressure
+    surface_.clear();
+    surface_count_ = 0;
     wall_sums_.reference = state_.pressure;
     return;
   }
-  raiseSurfacePressure();
+  raiseSurfacePressure(same_surface && surface_.size() == un);
   // The lowest pressure of each particle and its neighbours: a symmetric pair loop as the
   // others (each pair once, both sides; a minimum does not depend on the order).
   wall_sums_.reference = state_.pressure;
@@ -529,13 +530,11 @@ void Fluid::pressureTerms(bool from_density) {
   });
 }
 
-void Fluid::raiseSurfacePressure() {
+void Fluid::findSurface() {
   const std::size_t n = state_.size();
   surface_.assign(n, 0);
   const Vec3* x = state_.position.data();
   const double* inv_rho = inv_rho_.data();
-  const double support = kernel_.supportRadius();
-  const double r = params_.particle_radius;
   // The colour gradient sum_b V_b grad W_ab over the fluid's neighbours (it points into
   // the fluid at a free surface; the walls' samples are left out, so it points away from
   // a wall too, but there the walls' share fills the density up).
@@ -551,8 +550,7 @@ void Fluid::raiseSurfacePressure() {
     range(i0, i1, rg, x, neighbors_, kernel_, mass_, inv_rho, colour_sums);
   });
   colour_.resize(n);
-  Vec3* colour = colour_.data();
-  std::size_t surface_count = 0;
+  surface_count_ = 0;
   const double h = kernel_.smoothingLength();
   for (std::size_t i = 0; i < n; ++i) {
     colour_[i] = Vec3(colour_sums[4 * i], colour_sums[4 * i + 1], colour_sums[4 * i + 2]);
@@ -560,38 +558,70 @@ void Fluid::raiseSurfacePressure() {
         colour_[i].norm() * h > kSurfaceColour) {
       surface_[i] = 1;
       colour_[i] = -colour_[i].normalized();  // the outward normal from here on
-      ++surface_count;
+      ++surface_count_;
     }
   }
-  if (surface_count == 0) return;
-  // sum_b W_ab P_b r / (r + d_b) and sum_b W_ab over the surface particles' neighbours
-  // below them that are not at the surface.
-  surface_sums_.assign(2 * n, 0.0);
-  double* sums = surface_sums_.data();
+  if (surface_count_ == 0) return;
+  // The terms of raiseSurfacePressure's sums: each surface particle a's neighbours b at
+  // least r/2 below it (depth d_b = (x_a - x_b) . n_a) that are not at the surface, with
+  // W_ab r / (r + d_b), listed per range of the pair lists in the symmetric loop's order
+  // (the same terms in the same order on any number of threads), and sum_b W_ab.
+  const double support = kernel_.supportRadius();
+  const double r = params_.particle_radius;
   const std::uint8_t* surface = surface_.data();
-  const double* p = state_.pressure.data();
-  auto add = [&](std::size_t a, std::size_t b, const Vec3& d_ab, double w) {
-    const double depth = d_ab.dot(colour[a]);
-    if (depth < 0.5 * r) return;
-    sums[2 * a] += w * p[b] * r / (r + depth);
-    sums[2 * a + 1] += w;
-  };
-  forEachPairOnce(neighbors_, [&](std::size_t i, std::uint32_t j, bool both) {
-    const bool own = surface[i] && !surface[j];
-    const bool other = both && surface[j] && !surface[i];
-    if (!own && !other) return;
-    const Vec3 d = x[i] - x[j];
-    const double dist = d.norm();
-    if (dist >= support) return;
-    const double w = kernel_.value(dist);
-    if (own) add(i, j, d, w);
-    if (other) add(j, i, -d, w);
+  const Vec3* normal = colour_.data();
+  surface_weight_.assign(n, 0.0);
+  double* weight = surface_weight_.data();
+  surface_terms_.resize(neighbors_.ranges());
+  forEachRange(neighbors_, [&](std::int64_t i0, std::int64_t i1, std::size_t rg) {
+    std::vector<SurfaceTerm>& terms = surface_terms_[rg];
+    terms.clear();
+    auto add = [&](std::uint32_t a, std::uint32_t b, const Vec3& d_ab, double w) {
+      const double depth = d_ab.dot(normal[a]);
+      if (depth < 0.5 * r) return;
+      terms.push_back({a, b, w * r / (r + depth)});
+      weight[a] += w;
+    };
+    const std::uint32_t end = static_cast<std::uint32_t>(i1);
+    forEachListOfRange(
+        neighbors_, rg, i0, i1,
+        [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e, bool later) {
+          for (std::uint64_t q = k; q < e; ++q) {
+            const std::uint32_t j = nb[q];
+            const bool own = surface[i] && !surface[j];
+            const bool other = later && j < end && surface[j] && !surface[i];
+            if (!own && !other) continue;
+            const Vec3 d = x[i] - x[j];
+            const double dist = d.norm();
+            if (dist >= support) continue;
+            const double w = kernel_.value(dist);
+            const std::uint32_t ia = static_cast<std::uint32_t>(i);
+            if (own) add(ia, j, d, w);
+            if (other) add(j, ia, -d, w);
+          }
+        });
   });
+}
+
+void Fluid::raiseSurfacePressure(bool same_surface) {
+  if (!same_surface) findSurface();
+  if (surface_count_ == 0) return;
+  const std::size_t n = state_.size();
+  // sum_b W_ab P_b r / (r + d_b) over the terms findSurface listed, per range in its order.
+  surface_sums_.assign(n, 0.0);
+  double* sums = surface_sums_.data();
+  const double* p = state_.pressure.data();
+  forEachRange(neighbors_, [&](std::int64_t, std::int64_t, std::size_t rg) {
+    for (const SurfaceTerm& t : surface_terms_[rg])
+      sums[t.a] += t.coefficient * p[t.b];
+  });
+  const std::uint8_t* surface = surface_.data();
+  const double* weight = surface_weight_.data();
   const std::int64_t sn = static_cast<std::int64_t>(n);
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < sn; ++i)
-    if (surface[i] && sums[2 * i + 1] > 0.0)
-      state_.pressure[i] = std::max(state_.pressure[i], sums[2 * i] / sums[2 * i + 1]);
+    if (surface[i] && weight[i] > 0.0)
+      state_.pressure[i] = std::max(state_.pressure[i], sums[i] / weight[i]);
 }
 
 void Fluid::computeWithoutPressure() {
@@ -669,9 +699,10 @@ inline void addGradientTerms(const M* mine, const M* theirs, int used, Acc* own,
   }
 }
 
-template <class L, bool kUniformNu, bool kConsistent>
+template <class L, bool kUniformNu, bool kConsistent, bool kPressureOnly = false>
 inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
                               const AccelerationInputs& in) {
+  static_assert(kConsistent || !kPressureOnly, "the pressure alone: the consistent sums");
   const PairLists& pairs = *in.neighbors;
   const CubicSplineKernel& kernel = *in.kernel;
   const Vec3 *x = in.x, *v = in.v;
@@ -685,13 +716,14 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
     // The stored W'(r) / r of these pairs (at the lists' positions k ..), if any.
     const double* known = in.derivatives ? (both ? dwr_later : dwr_before) : nullptr;
     std::uint64_t at = k;  // the position of the group's first pair
-    double* own = sums + kAccelerationSums * i;
+    double* own = kPressureOnly ? nullptr : sums + kAccelerationSums * i;
     const double pr2_i = p ? p[i] * in.inv_rho[i] * in.inv_rho[i] : 0.0;
     // (acc.x, acc.y, acc.z, lap.x, lap.y, lap.z, unused, unused), L::kWidth to a register.
     constexpr int kAccBlocks = int(kAccelerationSums) / L::kWidth;
     L acc_lap[kAccBlocks];
-    for (int c = 0; c < kAccBlocks; ++c)
-      acc_lap[c] = both ? L::load(own + c * L::kWidth) : L::all(0.0);
+    if constexpr (!kPressureOnly)
+      for (int c = 0; c < kAccBlocks; ++c)
+        acc_lap[c] = both ? L::load(own + c * L::kWidth) : L::all(0.0);
     // kConsistent: the sums G, B, E, S (kGradientSums), L::kWidth to a register.
     double* own_g = kConsistent ? in.gradient_sums + kGradientSums * i : nullptr;
     constexpr int kBlocks = int(kGradientSums) / L::kWidth;
@@ -707,16 +739,12 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
     forEachNeighborGroup<L>(nb, k, e, [&](auto lanes, const std::uint32_t* j, int used) {
       using M = decltype(lanes);
       const M zero = M::all(0.0);
-      const double *px[M::kWidth], *pv[M::kWidth];
-      for (int t = 0; t < M::kWidth; ++t) {
+      const double* px[M::kWidth];
+      for (int t = 0; t < M::kWidth; ++t)
         px[t] = x[j[t]].data();
-        pv[t] = v[j[t]].data();
-      }
-      M xj, yj, zj, uj, vj, wj;
+      M xj, yj, zj;
       gather3Lanes(px, xj, yj, zj);
-      gather3Lanes(pv, uj, vj, wj);
       const M dx = M::all(x[i].x()) - xj, dy = M::all(x[i].y()) - yj, dz = M::all(x[i].z()) - zj;
-      const M du = M::all(v[i].x()) - uj, dv = M::all(v[i].y()) - vj, dw = M::all(v[i].z()) - wj;
       const M r_sq = dx * dx + dy * dy + dz * dz;
       auto stored = [&]() {
         if (used == M::kWidth) return M::load(known + at);
@@ -728,28 +756,38 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
       };
       const M dwr = known ? stored() : kernel.derivativeOverR(sqrt(r_sq));
       at += static_cast<std::uint64_t>(used);
-      // P / rho^2 of each side, (P rho^-1) rho^-1 (one neighbour at a time: the same bits).
       const M inv_rho_j = gatherLanes(zero, in.inv_rho, j);
-      M coeff = zero;
-      if (p) coeff = M::all(pr2_i) + gatherLanes(zero, p, j) * inv_rho_j * inv_rho_j;
-      const M vx = du * dx + dv * dy + dw * dz;
-      coeff = select(vx < zero,
-                     coeff + M::all(-in.visc) / (M::all(in.rho[i]) + gatherLanes(zero, in.rho, j)) *
-                                 vx / (r_sq + M::all(in.eps_sq)),
-                     coeff);
-      const M f = M::all(in.m) * coeff * dwr;
-      // Morris: x . grad W / |x|^2 = dW/dr / r (< 0), so v_a is drawn towards v_b.
-      const M mu = kUniformNu ? M::all(in.nu[0]) * (inv_rho_j + M::all(in.inv_rho[i]))
-                              : M::all(in.nu[i]) * inv_rho_j +
-                                    gatherLanes(zero, in.nu, j) * M::all(in.inv_rho[i]);
-      const M g = mu * dwr;
-      // lap += g v_ab, written as lap -= -(g v_ab) (the same bits).
-      const M terms[kAccelerationSums] = {f * dx,    f * dy,    f * dz, -(g * du),
-                                          -(g * dv), -(g * dw), zero,   zero};
-      double* other[M::kWidth];
-      for (int t = 0; t < M::kWidth; ++t)
-        other[t] = both && j[t] < end ? sums + kAccelerationSums * std::size_t(j[t]) : nullptr;
-      subtractPairTerms<int(kAccelerationSums)>(terms, used, acc_lap, other);
+      // The viscous terms and the symmetric pressure term (none with kPressureOnly).
+      if constexpr (!kPressureOnly) {
+        const double* pv[M::kWidth];
+        for (int t = 0; t < M::kWidth; ++t)
+          pv[t] = v[j[t]].data();
+        M uj, vj, wj;
+        gather3Lanes(pv, uj, vj, wj);
+        const M du = M::all(v[i].x()) - uj, dv = M::all(v[i].y()) - vj, dw = M::all(v[i].z()) - wj;
+        // P / rho^2 of each side, (P rho^-1) rho^-1 (one neighbour at a time: the same bits).
+        M coeff = zero;
+        if (p) coeff = M::all(pr2_i) + gatherLanes(zero, p, j) * inv_rho_j * inv_rho_j;
+        const M vx = du * dx + dv * dy + dw * dz;
+        coeff =
+            select(vx < zero,
+                   coeff + M::all(-in.visc) / (M::all(in.rho[i]) + gatherLanes(zero, in.rho, j)) *
+                               vx / (r_sq + M::all(in.eps_sq)),
+                   coeff);
+        const M f = M::all(in.m) * coeff * dwr;
+        // Morris: x . grad W / |x|^2 = dW/dr / r (< 0), so v_a is drawn towards v_b.
+        const M mu = kUniformNu ? M::all(in.nu[0]) * (inv_rho_j + M::all(in.inv_rho[i]))
+                                : M::all(in.nu[i]) * inv_rho_j +
+                                      gatherLanes(zero, in.nu, j) * M::all(in.inv_rho[i]);
+        const M g = mu * dwr;
+        // lap += g v_ab, written as lap -= -(g v_ab) (the same bits).
+        const M terms[kAccelerationSums] = {f * dx,    f * dy,    f * dz, -(g * du),
+                                            -(g * dv), -(g * dw), zero,   zero};
+        double* other[M::kWidth];
+        for (int t = 0; t < M::kWidth; ++t)
+          other[t] = both && j[t] < end ? sums + kAccelerationSums * std::size_t(j[t]) : nullptr;
+        subtractPairTerms<int(kAccelerationSums)>(terms, used, acc_lap, other);
+      }
       if constexpr (kConsistent) {
         const M pj = gatherLanes(zero, in.gradient_p, j);
         const M rj2 = inv_rho_j * inv_rho_j;
@@ -781,6 +819,7 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
       for (int c = 0; c < kBlocks; ++c)
         gs[c].store(own_g + c * L::kWidth);
     }
+    if constexpr (kPressureOnly) return;  // the accelerations: addConsistentPressure
     for (int c = 0; c < kAccBlocks; ++c)
       acc_lap[c].store(own + c * L::kWidth);
     if (!both) return;
@@ -793,16 +832,16 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
   forEachListOfRange(pairs, r, i0, i1, add);
 }
 
-template <bool kUniformNu, bool kConsistent>
+template <bool kUniformNu, bool kConsistent, bool kPressureOnly = false>
 void accelerationRange2(std::int64_t i0, std::int64_t i1, std::size_t r,
                         const AccelerationInputs& in) {
-  accelerationRange<Lanes2, kUniformNu, kConsistent>(i0, i1, r, in);
+  accelerationRange<Lanes2, kUniformNu, kConsistent, kPressureOnly>(i0, i1, r, in);
 }
 #if defined(WAKE_HAS_LANES4)
-template <bool kUniformNu, bool kConsistent>
+template <bool kUniformNu, bool kConsistent, bool kPressureOnly = false>
 WAKE_TARGET_AVX void accelerationRange4(std::int64_t i0, std::int64_t i1, std::size_t r,
                                         const AccelerationInputs& in) {
-  accelerationRange<Lanes4, kUniformNu, kConsistent>(i0, i1, r, in);
+  accelerationRange<Lanes4, kUniformNu, kConsistent, kPressureOnly>(i0, i1, r, in);
 }
 #endif
 
@@ -810,6 +849,18 @@ WAKE_TARGET_AVX void accelerationRange4(std::int64_t i0, std::int64_t i1, std::s
 
 void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& extra,
                                  const PairDerivatives* derivatives) {
+  accelerationPass(gravity, extra, derivatives, false);
+}
+
+void Fluid::computePressureAccelerations(const PairDerivatives* derivatives) {
+  if (!pressure_term_ || params_.pressure_gradient != PressureGradient::Consistent)
+    throw std::logic_error(
+        "Fluid::computePressureAccelerations: the consistent pressure gradient's pressure only");
+  accelerationPass(Vec3::Zero(), {}, derivatives, true);
+}
+
+void Fluid::accelerationPass(const Vec3& gravity, const std::vector<Vec3>& extra,
+                             const PairDerivatives* derivatives, bool pressure_only) {
   if (neighbors_.size() != state_.size())
     throw std::logic_error("Fluid::computeAccelerations before updateNeighbors");
   const std::size_t un = state_.size();
@@ -860,22 +911,29 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
     pressure_extra = extra_copy.empty() ? in.add : extra_copy.data();
     in.add = nullptr;
   }
-  state_.acceleration.resize(un);
+  if (pressure_only)  // the pair loop writes no accelerations: addConsistentPressure adds
+    state_.acceleration.assign(un, Vec3::Zero());
+  else
+    state_.acceleration.resize(un);
   in.out = state_.acceleration.data();
   using Range = void (*)(std::int64_t, std::int64_t, std::size_t, const AccelerationInputs&);
   // [uniform][consistent]
   Range range[2][2] = {{accelerationRange2<false, false>, accelerationRange2<false, true>},
                        {accelerationRange2<true, false>, accelerationRange2<true, true>}};
+  Range pressure_loop = accelerationRange2<true, true, true>;
 #if defined(WAKE_HAS_LANES4)
   if (wide_lanes_) {
     range[0][0] = accelerationRange4<false, false>;
     range[0][1] = accelerationRange4<false, true>;
     range[1][0] = accelerationRange4<true, false>;
     range[1][1] = accelerationRange4<true, true>;
+    pressure_loop = accelerationRange4<true, true, true>;
   }
 #endif
-  const Range loop = range[uniform][consistent];
-  in.sums = step_.view<double>(0, kAccelerationSums * un);
+  const Range loop = pressure_only ? pressure_loop : range[uniform][consistent];
+  // The viscous and symmetric terms' partial sums (none for the pressure alone: the step's
+  // scratch is left as it is).
+  in.sums = pressure_only ? nullptr : step_.view<double>(0, kAccelerationSums * un);
   in.derivatives = derivatives;
   if (derivatives && (derivatives->later.size() != neighbors_.ranges() ||
                       derivatives->before.size() != neighbors_.ranges()))
@@ -1002,13 +1060,6 @@ void Fluid::predictPositions(double dt) {
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i)
     x_pred[i] = st.position[i] + dt * st.velocity[i];
-}
-
-void Fluid::restoreStepStartVelocities(const std::vector<Vec3>& v) {
-  const std::size_t n = state_.size();
-  if (v.size() != n)
-    throw std::invalid_argument("restoreStepStartVelocities: one velocity per particle");
-  std::copy(v.begin(), v.end(), step_.view<Vec3>(0, 2 * n));
 }
 
 void Fluid::integratePositions(double dt) {

@@ -248,7 +248,10 @@ class Fluid {
   /// computePressure with the state's pressure as it is instead of Tait's (a pressure
   /// solver's, coupling/consistent_solve.hpp): the free surface's raise, the references and
   /// the walls' sums cleared, the densities' 1 / rho; the pressure term on.
-  void computePressureFromState();
+  /// `same_surface`: the positions and densities are those of the last call, so the free
+  /// surface's particles and normals it found (a pass over the pairs) are taken as they are
+  /// (a solver's iterations on one step); the result is the same bits.
+  void computePressureFromState(bool same_surface = false);
   /// PressureGradient::Consistent's constants (computeAccelerations, raiseSurfacePressure;
   /// docs/forces.md has the measurements that chose them).
   static constexpr double kRepulsion = 0.3;
@@ -306,6 +309,13 @@ class Fluid {
   /// (the same bits: no square root and kernel per pair).
   void computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& extra = {},
                             const PairDerivatives* derivatives = nullptr);
+  /// The pressure term of computeAccelerations alone, into the state's acceleration (sized
+  /// n): PressureGradient::Consistent only, after computePressure or
+  /// computePressureFromState and the walls' sums. No viscosity, no gravity, no extra: for
+  /// a solver that evaluates the pressure's accelerations for many pressures on the same
+  /// positions (DFSPH's consistent density solve), one pair loop of the consistent sums
+  /// alone. Leaves the step's scratch (stepStartVelocities, predictedPositions) as it is.
+  void computePressureAccelerations(const PairDerivatives* derivatives = nullptr);
 
   /// The step's prediction with every force but the boundaries' control: v* = v + dt a
   /// (in the state), x* = x + dt v* (predictedPositions), the velocities before kept
@@ -313,10 +323,6 @@ class Fluid {
   void predict(double dt);
   /// x* = x + dt v (predictedPositions) with the velocities as they are now.
   void predictPositions(double dt);
-  /// Writes `v` (one per particle) back as the step-start velocities (stepStartVelocities),
-  /// for a caller whose computeAccelerations after predict() overwrote them (DFSPH's
-  /// consistent density solve: the control's restitution reads them).
-  void restoreStepStartVelocities(const std::vector<Vec3>& v);
   /// (n) The velocities before the last predict(), and the positions it (or
   /// predictPositions) predicted: valid until the next computeAccelerations, whose scratch
   /// holds them.
@@ -364,7 +370,15 @@ class Fluid {
   std::vector<double> gradient_sums_;
   std::vector<Vec3> colour_;
   std::vector<std::uint8_t> surface_;
-  std::vector<double> surface_sums_;
+  std::size_t surface_count_ = 0;  ///< particles with surface_ set
+  /// A term of a surface particle a's raised pressure: W_ab r / (r + d_b) P_b.
+  struct SurfaceTerm {
+    std::uint32_t a, b;
+    double coefficient;
+  };
+  std::vector<std::vector<SurfaceTerm>> surface_terms_;  ///< per range of the pair lists
+  std::vector<double> surface_weight_;                   ///< (n) sum_b W_ab of a's terms
+  std::vector<double> surface_sums_;                     ///< (n) sum of a's terms
   /// The step's scratch, in turn: the sort's order, cells and id gather (3 n uint32,
   /// updateNeighbors); the force loop's partial sums (8 n doubles); from predict() on, the
   /// step's start velocities and the predicted positions (2 n Vec3).
@@ -372,8 +386,12 @@ class Fluid {
 
   bool wide_lanes_ = hasWideLanes();
 
-  /// computePressure and computePressureFromState: the pressure from Tait's equation or as it is.
-  void pressureTerms(bool from_density);
+  /// computeAccelerations, or with `pressure_only` computePressureAccelerations.
+  void accelerationPass(const Vec3& gravity, const std::vector<Vec3>& extra,
+                        const PairDerivatives* derivatives, bool pressure_only);
+  /// computePressure and computePressureFromState: the pressure from Tait's equation or as
+  /// it is; `same_surface` as computePressureFromState's.
+  void pressureTerms(bool from_density, bool same_surface = false);
   /// PressureGradient::Consistent, after the equation of state: a particle at the free
   /// surface (density < kSurfaceDensity rho0 and |sum_b V_b grad W_ab| H > kSurfaceColour)
   /// gets at least the pressure that vanishes r beyond it along its outward normal n (minus
@@ -382,8 +400,13 @@ class Fluid {
   ///   P_a = max(P_a, sum_b W_ab P_b r / (r + d_b) / sum_b W_ab).
   /// Tait's pressure is zero there (density < rho0): without this the pressure would vanish
   /// at the top particles' centres, r below the fluid's surface by volume, and a body would
-  /// feel the head of a column r lower than its own.
-  void raiseSurfacePressure();
+  /// feel the head of a column r lower than its own. `same_surface`: surface_ and colour_
+  /// as the last call left them (the same positions and densities).
+  void raiseSurfacePressure(bool same_surface);
+  /// raiseSurfacePressure's surface test: surface_, colour_ (the outward normals there),
+  /// surface_count_ and the raise's terms (surface_terms_, surface_weight_) from the
+  /// positions and densities.
+  void findSurface();
   /// PressureGradient::Consistent, after computeAccelerations' pair loop has left the
   /// fluid's sums G, B, E, S in gradient_sums_: adds each particle's pressure term (see
   /// computeAccelerations), with the walls' sums, plus extra[i] (when not null) to its

@@ -63,4 +63,24 @@ void forEachPairOnce(const PairLists& pairs, F&& f) {
   });
 }
 
+/// forEachPairOnce with each pair's stored value: f(i, j, both, value), value the entry
+/// of `later` (of `before`) at the pair's place in the lists (per range, laid out as
+/// pairs.later and pairs.before: e.g. PairDerivatives, sph/fluid.hpp).
+template <class F>
+void forEachPairOnceWith(const PairLists& pairs, const std::vector<std::vector<double>>& later,
+                         const std::vector<std::vector<double>>& before, F&& f) {
+  forEachRange(pairs, [&](std::int64_t i0, std::int64_t i1, std::size_t r) {
+    const std::uint32_t end = static_cast<std::uint32_t>(i1);
+    const double* value_later = later[r].data();
+    const double* value_before = before[r].data();
+    forEachListOfRange(pairs, r, i0, i1,
+                       [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k,
+                           std::uint64_t e, bool in_later) {
+                         const double* value = in_later ? value_later : value_before;
+                         for (std::uint64_t q = k; q < e; ++q)
+                           f(static_cast<std::size_t>(i), nb[q], in_later && nb[q] < end, value[q]);
+                       });
+  });
+}
+
 }  // namespace wake
