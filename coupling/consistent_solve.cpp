@@ -81,7 +81,7 @@ int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
     fluid.computePressureFromState(/*same_surface=*/iterations > 0);
     boundaries.computeSamplePressure(fluid, at, gravity, pairs, samples);
     boundaries.addWallPressure(fluid, at, pairs, samples, wall_unused_, fluid.wallPressureSums());
-    fluid.computePressureAccelerations(&derivatives);
+    fluid.computePressureAccelerations(&derivatives, /*same_positions=*/iterations > 0);
 #pragma omp parallel for schedule(static)
     for (std::int64_t i = 0; i < n; ++i) {
       velocity_[i] = predicted_[i] + dt * st.acceleration[i];

@@ -302,6 +302,9 @@ constexpr std::size_t kAccelerationSums = 8;
 /// The consistent pressure force's sums per particle: G (3), B (6: xx yy zz xy xz yz),
 /// E (3), S (3) and one unused, so that they load and store two at a time.
 constexpr std::size_t kGradientSums = 16;
+/// The sums of those that change with the pressure alone (Fluid::computePressureAccelerations
+/// on the same positions): G (3), one unused, S (3), one unused.
+constexpr std::size_t kPressureSums = 8;
 
 /// x_a - x_b of point a = i and the group's neighbours j (a lane each).
 template <class M>
@@ -680,15 +683,16 @@ struct AccelerationInputs {
 /// with V = m / rho; every term is the same bits from either side of its pair.
 /// Adds a group's terms of the consistent pressure force to a's sums `own` (one
 /// neighbour after the other: the list's order) and, where to[t] is not null, to
-/// neighbour t's sums. `mine`: a's terms (per sum, a lane per neighbour); `theirs`: the
-/// neighbours' G and B terms (the first 12 sums: E, S and the rest are a's negated).
-template <class Acc, class M>
+/// neighbour t's sums. `mine`: a's kSums terms (per sum, a lane per neighbour); `theirs`:
+/// the neighbours' first kTheirSums terms (the full sums: G and B, the first 12; the
+/// pressure's sums alone: G, the first 4), the rest of theirs a's negated.
+template <int kSums, int kTheirSums, class Acc, class M>
 inline void addGradientTerms(const M* mine, const M* theirs, int used, Acc* own,
                              double* const* to) {
-  constexpr int kW = Acc::kWidth, kBlocks = int(kGradientSums) / kW, kTheirs = 12 / kW;
+  constexpr int kW = Acc::kWidth, kBlocks = kSums / kW, kTheirs = kTheirSums / kW;
   Acc row[M::kWidth][kBlocks], their_row[M::kWidth][kTheirs];
-  pairRows<int(kGradientSums)>(mine, row);
-  pairRows<12>(theirs, their_row);
+  pairRows<kSums>(mine, row);
+  pairRows<kTheirSums>(theirs, their_row);
   for (int t = 0; t < used; ++t) {
     for (int k = 0; k < kBlocks; ++k)
       own[k] = own[k] + row[t][k];
@@ -812,7 +816,7 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
         for (int t = 0; t < M::kWidth; ++t)
           to[t] =
               both && j[t] < end ? in.gradient_sums + kGradientSums * std::size_t(j[t]) : nullptr;
-        addGradientTerms(mine, theirs, used, gs, to);
+        addGradientTerms<int(kGradientSums), 12>(mine, theirs, used, gs, to);
       }
     });
     if constexpr (kConsistent) {
@@ -845,6 +849,77 @@ WAKE_TARGET_AVX void accelerationRange4(std::int64_t i0, std::int64_t i1, std::s
 }
 #endif
 
+/// The consistent pressure force's sums that change with the pressure, G and S
+/// (kPressureSums per particle), of the particles [i0, i1): accelerationRange's terms of
+/// them, from the same W'(r) / r in the same order (the same bits), without the moment B
+/// and E, which depend on the positions and densities alone.
+template <class L>
+inline void pressureSumsRange(std::int64_t i0, std::int64_t i1, std::size_t r,
+                              const AccelerationInputs& in) {
+  const PairLists& pairs = *in.neighbors;
+  const CubicSplineKernel& kernel = *in.kernel;
+  const Vec3* x = in.x;
+  const std::uint32_t end = static_cast<std::uint32_t>(i1);
+  const double* dwr_later = in.derivatives ? in.derivatives->later[r].data() : nullptr;
+  const double* dwr_before = in.derivatives ? in.derivatives->before[r].data() : nullptr;
+  auto add = [&](std::int64_t i, const std::uint32_t* nb, std::uint64_t k, std::uint64_t e,
+                 bool both) {
+    const double* known = in.derivatives ? (both ? dwr_later : dwr_before) : nullptr;
+    std::uint64_t at = k;
+    double* own_g = in.gradient_sums + kPressureSums * i;
+    constexpr int kBlocks = int(kPressureSums) / L::kWidth;
+    L gs[kBlocks];
+    for (int c = 0; c < kBlocks; ++c)
+      gs[c] = both ? L::load(own_g + c * L::kWidth) : L::all(0.0);
+    const double ri2 = in.inv_rho[i] * in.inv_rho[i];
+    const double gp_i = in.gradient_p[i];
+    const double gpr2_i = gp_i * ri2;
+    forEachNeighborGroup<L>(nb, k, e, [&](auto lanes, const std::uint32_t* j, int used) {
+      using M = decltype(lanes);
+      const M zero = M::all(0.0);
+      M dx, dy, dz;
+      pairOffsets(x, i, j, dx, dy, dz);
+      M dwr;
+      if (known) {
+        double d[M::kWidth];  // an unused lane repeats the first pair, as its index does
+        for (int t = 0; t < M::kWidth; ++t)
+          d[t] = known[at + (t < used ? t : 0)];
+        dwr = M::load(d);
+      } else {
+        dwr = kernel.derivativeOverR(sqrt(dx * dx + dy * dy + dz * dz));
+      }
+      at += static_cast<std::uint64_t>(used);
+      const M inv_rho_j = gatherLanes(zero, in.inv_rho, j);
+      const M pj = gatherLanes(zero, in.gradient_p, j);
+      const M rj2 = inv_rho_j * inv_rho_j;
+      const M dp = (pj - M::all(gp_i)) * dwr;  // (P_b - P_a) w'
+      const M sym = M::all(in.m) * (M::all(gpr2_i) + pj * rj2) * dwr;
+      const M gv = (M::all(in.m) * inv_rho_j) * dp, gu = M::all(in.m * in.inv_rho[i]) * dp;
+      const M mine[kPressureSums] = {gv * dx,  gv * dy,  gv * dz,  zero,
+                                     sym * dx, sym * dy, sym * dz, zero};
+      const M theirs[4] = {gu * dx, gu * dy, gu * dz, zero};
+      double* to[M::kWidth];
+      for (int t = 0; t < M::kWidth; ++t)
+        to[t] = both && j[t] < end ? in.gradient_sums + kPressureSums * std::size_t(j[t]) : nullptr;
+      addGradientTerms<int(kPressureSums), 4>(mine, theirs, used, gs, to);
+    });
+    for (int c = 0; c < kBlocks; ++c)
+      gs[c].store(own_g + c * L::kWidth);
+  };
+  forEachListOfRange(pairs, r, i0, i1, add);
+}
+
+void pressureSumsRange2(std::int64_t i0, std::int64_t i1, std::size_t r,
+                        const AccelerationInputs& in) {
+  pressureSumsRange<Lanes2>(i0, i1, r, in);
+}
+#if defined(WAKE_HAS_LANES4)
+WAKE_TARGET_AVX void pressureSumsRange4(std::int64_t i0, std::int64_t i1, std::size_t r,
+                                        const AccelerationInputs& in) {
+  pressureSumsRange<Lanes4>(i0, i1, r, in);
+}
+#endif
+
 }  // namespace
 
 void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& extra,
@@ -852,11 +927,43 @@ void Fluid::computeAccelerations(const Vec3& gravity, const std::vector<Vec3>& e
   accelerationPass(gravity, extra, derivatives, false);
 }
 
-void Fluid::computePressureAccelerations(const PairDerivatives* derivatives) {
+void Fluid::computePressureAccelerations(const PairDerivatives* derivatives, bool same_positions) {
   if (!pressure_term_ || params_.pressure_gradient != PressureGradient::Consistent)
     throw std::logic_error(
         "Fluid::computePressureAccelerations: the consistent pressure gradient's pressure only");
-  accelerationPass(Vec3::Zero(), {}, derivatives, true);
+  const std::size_t un = state_.size();
+  if (!same_positions || pressure_geometry_.size() != kPressureGeometry * un) {
+    accelerationPass(Vec3::Zero(), {}, derivatives, true);  // keeps the geometry
+    return;
+  }
+  if (neighbors_.size() != un)
+    throw std::logic_error("Fluid::computePressureAccelerations before updateNeighbors");
+  const WallPressureSums& walls = wall_sums_;
+  if (walls.difference.size() != un || walls.spread.size() != un || walls.symmetric.size() != un ||
+      walls.reference.size() != un)
+    throw std::logic_error(
+        "Fluid::computePressureAccelerations: the walls' pressure sums are not this step's");
+  if (derivatives && (derivatives->later.size() != neighbors_.ranges() ||
+                      derivatives->before.size() != neighbors_.ranges()))
+    throw std::invalid_argument("computePressureAccelerations: derivatives of other pair lists");
+  AccelerationInputs in{};
+  in.x = state_.position.data();
+  in.inv_rho = inv_rho_.data();
+  in.neighbors = &neighbors_;
+  in.kernel = &kernel_;
+  in.m = mass_;
+  in.derivatives = derivatives;
+  in.gradient_p = state_.pressure.data();
+  gradient_sums_.resize(kGradientSums * un);  // the first kPressureSums n of it
+  in.gradient_sums = gradient_sums_.data();
+  auto range = pressureSumsRange2;
+#if defined(WAKE_HAS_LANES4)
+  if (wide_lanes_) range = pressureSumsRange4;
+#endif
+  forEachRange(neighbors_,
+               [&](std::int64_t i0, std::int64_t i1, std::size_t r) { range(i0, i1, r, in); });
+  state_.acceleration.assign(un, Vec3::Zero());
+  addKeptGeometryPressure();
 }
 
 void Fluid::accelerationPass(const Vec3& gravity, const std::vector<Vec3>& extra,
@@ -940,7 +1047,7 @@ void Fluid::accelerationPass(const Vec3& gravity, const std::vector<Vec3>& extra
     throw std::invalid_argument("computeAccelerations: derivatives of other pair lists");
   forEachRange(neighbors_,
                [&](std::int64_t i0, std::int64_t i1, std::size_t r) { loop(i0, i1, r, in); });
-  if (consistent) addConsistentPressure(pressure_extra);
+  if (consistent) addConsistentPressure(pressure_extra, /*keep_geometry=*/pressure_only);
 }
 
 namespace {
@@ -954,13 +1061,15 @@ double smallestEigenvalue(const Eigen::Matrix3d& m) {
 
 }  // namespace
 
-void Fluid::addConsistentPressure(const Vec3* extra) {
+void Fluid::addConsistentPressure(const Vec3* extra, bool keep_geometry) {
   const WallPressureSums& walls = wall_sums_;
   const double* sums = gradient_sums_.data();
   const double* inv_rho = inv_rho_.data();
   const double* p = state_.pressure.data();
   Vec3* out = state_.acceleration.data();
   const std::int64_t n = static_cast<std::int64_t>(state_.size());
+  if (keep_geometry) pressure_geometry_.assign(kPressureGeometry * state_.size(), 0.0);
+  double* geometry = keep_geometry ? pressure_geometry_.data() : nullptr;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
     const double* s = sums + kGradientSums * i;
@@ -986,6 +1095,12 @@ void Fluid::addConsistentPressure(const Vec3* extra) {
                                : std::clamp((smallestEigenvalue(b) - kSprayMoment[0]) /
                                                 (kSprayMoment[1] - kSprayMoment[0]),
                                             0.0, 1.0);
+    double* kept = geometry ? geometry + kPressureGeometry * i : nullptr;
+    if (kept) {
+      kept[10] = w_spray;
+      for (int c = 0; c < 3; ++c)
+        kept[11 + c] = s[9 + c];  // E
+    }
     const Vec3 own = extra ? extra[i] : Vec3::Zero();
     const Vec3 symmetric = own - Vec3(s[12], s[13], s[14]) + walls.symmetric[i];
     if (w_spray == 0.0) {
@@ -1005,11 +1120,50 @@ void Fluid::addConsistentPressure(const Vec3* extra) {
     // Nearly singular (few neighbours): the sum uncorrected, between the two by det B.
     const double w_det = std::clamp(
         (det - kMomentDeterminant[0]) / (kMomentDeterminant[1] - kMomentDeterminant[0]), 0.0, 1.0);
-    const Vec3 grad_p = w_det > 0.0 ? Vec3(w_det * (b.inverse() * g) + (1.0 - w_det) * g) : g;
-    const Vec3 consistent =
-        own - inv_rho[i] * grad_p - kRepulsion * (p[i] - walls.reference[i]) * spread;
-    out[i] +=
-        w_spray == 1.0 ? consistent : Vec3(w_spray * consistent + (1.0 - w_spray) * symmetric);
+    Eigen::Matrix3d inverse = Eigen::Matrix3d::Identity();
+    if (w_det > 0.0) inverse = b.inverse();
+    if (kept) {
+      kept[9] = w_det;
+      Eigen::Map<Eigen::Matrix3d> kept_inverse(kept);
+      kept_inverse = inverse;
+    }
+    out[i] += pressureTerm(g, spread, symmetric, own, inverse, w_det, w_spray, inv_rho[i],
+                           p[i] - walls.reference[i]);
+  }
+}
+
+Vec3 Fluid::pressureTerm(const Vec3& g, const Vec3& spread, const Vec3& symmetric, const Vec3& own,
+                         const Eigen::Matrix3d& inverse, double w_det, double w_spray,
+                         double inv_rho, double above_reference) {
+  const Vec3 grad_p = w_det > 0.0 ? Vec3(w_det * (inverse * g) + (1.0 - w_det) * g) : g;
+  const Vec3 consistent = own - inv_rho * grad_p - kRepulsion * above_reference * spread;
+  return w_spray == 1.0 ? consistent : Vec3(w_spray * consistent + (1.0 - w_spray) * symmetric);
+}
+
+void Fluid::addKeptGeometryPressure() {
+  const WallPressureSums& walls = wall_sums_;
+  const double* sums = gradient_sums_.data();
+  const double* geometry = pressure_geometry_.data();
+  const double* inv_rho = inv_rho_.data();
+  const double* p = state_.pressure.data();
+  Vec3* out = state_.acceleration.data();
+  const std::int64_t n = static_cast<std::int64_t>(state_.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i) {
+    const double* s = sums + kPressureSums * i;  // G, unused, S, unused
+    const double* kept = geometry + kPressureGeometry * i;
+    const Vec3 own = Vec3::Zero();
+    const Vec3 symmetric = own - Vec3(s[4], s[5], s[6]) + walls.symmetric[i];
+    const double w_spray = kept[10];
+    if (w_spray == 0.0) {
+      out[i] += symmetric;
+      continue;
+    }
+    const Vec3 g = Vec3(s[0], s[1], s[2]) + walls.difference[i];
+    const Vec3 spread = Vec3(kept[11], kept[12], kept[13]) + walls.spread[i];
+    const Eigen::Matrix3d inverse = Eigen::Map<const Eigen::Matrix3d>(kept);
+    out[i] += pressureTerm(g, spread, symmetric, own, inverse, kept[9], w_spray, inv_rho[i],
+                           p[i] - walls.reference[i]);
   }
 }
 

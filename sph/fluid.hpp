@@ -315,7 +315,13 @@ class Fluid {
   /// a solver that evaluates the pressure's accelerations for many pressures on the same
   /// positions (DFSPH's consistent density solve), one pair loop of the consistent sums
   /// alone. Leaves the step's scratch (stepStartVelocities, predictedPositions) as it is.
-  void computePressureAccelerations(const PairDerivatives* derivatives = nullptr);
+  /// `same_positions`: the positions, densities and walls' samples are those of the last
+  /// call (a solver's iterations on one step), so what of the force depends on them alone
+  /// (each particle's moment B_a with the walls', its inverse and blends, E_a's fluid sum)
+  /// is taken as that call left it, and the pair loop finds G_a and S_a alone; the same
+  /// bits.
+  void computePressureAccelerations(const PairDerivatives* derivatives = nullptr,
+                                    bool same_positions = false);
 
   /// The step's prediction with every force but the boundaries' control: v* = v + dt a
   /// (in the state), x* = x + dt v* (predictedPositions), the velocities before kept
@@ -379,6 +385,12 @@ class Fluid {
   std::vector<std::vector<SurfaceTerm>> surface_terms_;  ///< per range of the pair lists
   std::vector<double> surface_weight_;                   ///< (n) sum_b W_ab of a's terms
   std::vector<double> surface_sums_;                     ///< (n) sum of a's terms
+  /// Per particle, what its consistent pressure term takes from the positions alone
+  /// (addConsistentPressure with keep_geometry): B_a^-1 (9, with the walls' moment; the
+  /// identity where not used), the determinant's blend, the spray's blend, E_a's fluid sum
+  /// (3), two unused.
+  static constexpr std::size_t kPressureGeometry = 16;
+  std::vector<double> pressure_geometry_;
   /// The step's scratch, in turn: the sort's order, cells and id gather (3 n uint32,
   /// updateNeighbors); the force loop's partial sums (8 n doubles); from predict() on, the
   /// step's start velocities and the predicted positions (2 n Vec3).
@@ -411,7 +423,16 @@ class Fluid {
   /// fluid's sums G, B, E, S in gradient_sums_: adds each particle's pressure term (see
   /// computeAccelerations), with the walls' sums, plus extra[i] (when not null) to its
   /// acceleration.
-  void addConsistentPressure(const Vec3* extra);
+  /// `keep_geometry`: also keeps what of each particle's term depends on the positions
+  /// alone in pressure_geometry_ (computePressureAccelerations' same_positions).
+  void addConsistentPressure(const Vec3* extra, bool keep_geometry = false);
+  /// addConsistentPressure with pressure_geometry_ and the pressure's sums alone
+  /// (kPressureSums per particle in gradient_sums_: G, S).
+  void addKeptGeometryPressure();
+  /// One particle's consistent pressure term from its sums (addConsistentPressure).
+  static Vec3 pressureTerm(const Vec3& g, const Vec3& spread, const Vec3& symmetric,
+                           const Vec3& own, const Eigen::Matrix3d& inverse, double w_det,
+                           double w_spray, double inv_rho, double above_reference);
 
   /// Fits the grid to the bounds of the n points from `x` on for pairs within `radius`.
   void fitGrid(const Vec3* x, std::size_t n, double radius);

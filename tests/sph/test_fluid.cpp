@@ -269,6 +269,73 @@ TEST(ConsistentPressure, SameBitsOnAnyNumberOfThreads) {
   omp_set_num_threads(threads_before);
 }
 
+/// Fluid::computePressureAccelerations, a pressure solver's evaluation (DFSPH's consistent
+/// density solve): without viscosity it is computeAccelerations' pressure term, bit for
+/// bit; on the same positions with another pressure (`same_positions`, the moments and
+/// the free surface kept from the last call) it is what a fresh evaluation gives, bit for
+/// bit; and it leaves the step's scratch (the step-start velocities) as it is.
+TEST(ConsistentPressure, ThePressureAloneOnTheSamePositionsIsAFreshEvaluation) {
+  const int threads_before = omp_get_max_threads();
+  for (int threads : {1, 3}) {
+    omp_set_num_threads(threads);
+    FluidParams params = testParams();
+    params.viscosity = 0.0;
+    params.kinematic_viscosity = 0.0;
+    Fluid fluid(params, kDomain);
+    fillLattice(fluid, 10, 0.0185);
+    std::mt19937 rng(29);
+    std::uniform_real_distribution<double> u(-1, 1);
+    FluidState& st = fluid.state();
+    for (std::size_t i = 0; i < st.size(); ++i) {
+      st.position[i] += 0.003 * Vec3(u(rng), u(rng), u(rng));
+      st.velocity[i] = Vec3(u(rng), u(rng), u(rng));
+    }
+    fluid.updateNeighbors();
+    fluid.computeFluidDensity();
+    fluid.computePressure();
+    fluid.computeAccelerations(Vec3::Zero());
+    const std::vector<Vec3> whole = st.acceleration;
+    fluid.predict(1e-3);
+    const std::vector<Vec3> start(fluid.stepStartVelocities(),
+                                  fluid.stepStartVelocities() + st.size());
+    fluid.computePressureFromState();
+    fluid.computePressureAccelerations();
+    for (std::size_t i = 0; i < st.size(); ++i)
+      ASSERT_EQ(st.acceleration[i], whole[i]) << "particle " << i << ", " << threads;
+    const std::vector<Vec3> first = st.acceleration;
+    // Another pressure on the same positions, kept and fresh.
+    std::vector<double> other(st.size());
+    for (double& p : other)
+      p = 2000.0 * (1.0 + u(rng));
+    st.pressure = other;
+    fluid.computePressureFromState(/*same_surface=*/true);
+    fluid.computePressureAccelerations(nullptr, /*same_positions=*/true);
+    const std::vector<Vec3> kept = st.acceleration;
+    const std::vector<double> kept_p = st.pressure;
+    st.pressure = other;
+    fluid.computePressureFromState();
+    fluid.computePressureAccelerations();
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < st.size(); ++i) {
+      ASSERT_EQ(kept[i], st.acceleration[i]) << "particle " << i << ", " << threads;
+      ASSERT_EQ(kept_p[i], st.pressure[i]) << "particle " << i << ", " << threads;
+      differ += kept[i] != first[i];
+    }
+    EXPECT_EQ(differ, st.size());
+    for (std::size_t i = 0; i < st.size(); ++i)
+      ASSERT_EQ(fluid.stepStartVelocities()[i], start[i]) << "particle " << i;
+  }
+  omp_set_num_threads(threads_before);
+  FluidParams symmetric = testParams();  // the symmetric form: no pressure alone
+  symmetric.pressure_gradient = PressureGradient::Symmetric;
+  Fluid fluid(symmetric, kDomain);
+  fillLattice(fluid, 4, 0.019);
+  fluid.updateNeighbors();
+  fluid.computeFluidDensity();
+  fluid.computePressure();
+  EXPECT_THROW(fluid.computePressureAccelerations(), std::logic_error);
+}
+
 /// The free surface's pressure: a block at rest under gravity whose pressure is the
 /// hydrostatic one (set as a compression that gives it) raises its top layer's pressure
 /// from Tait's zero to about the weight of the r of fluid above its centres, and leaves
