@@ -528,6 +528,7 @@ void Boundaries::consistentWallSums(const Fluid& fluid, const BodyPlacement& at,
   const double rho0 = fluid_.rest_density;
   const double support = kernel_.supportRadius();
   const double rest2 = 1.0 / (rho0 * rho0);  // 1 / rho_k^2 of a sample at P = 0
+  const bool moments = sums.moments;
   Vec3 g = Vec3::Zero(), e = Vec3::Zero(), sym = Vec3::Zero();
   Mat3 b = Mat3::Zero();
   double ref = sums.reference[i];
@@ -558,19 +559,20 @@ void Boundaries::consistentWallSums(const Fluid& fluid, const BodyPlacement& at,
                            const double rk2 = pk[k] > 0.0 ? pr2[k] / pk[k] : rest2;
                            ref = std::min(ref, pk[k]);
                            gs += (v * (pk[k] - pa) * w) * d;
-                           bs.noalias() -= (v * w) * d * d.transpose();
+                           if (moments) bs.noalias() -= (v * w) * d * d.transpose();
                            es += (rho0 * v * (ra2 + rk2) * w) * d;
                            ss += (rho0 * v * (pa2 + pr2[k]) * w) * d;
                          }
                          g += rotation * gs;
                          e += rotation * es;
                          sym -= rotation * ss;
-                         b += rotation * bs * rotation.transpose();
+                         if (moments) b += rotation * bs * rotation.transpose();
                        });
   sums.reference[i] = ref;
   sums.difference[i] += g;
   sums.spread[i] += e;
   sums.symmetric[i] += sym;
+  if (!moments) return;  // kept from the last evaluation on these positions
   std::array<double, 6>& m = sums.moment[i];
   m[0] += b(0, 0);
   m[1] += b(1, 1);

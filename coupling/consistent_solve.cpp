@@ -76,9 +76,10 @@ int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
   int iterations = 0;
   for (;; ++iterations) {
     // The pressure's accelerations with p: WCSPH's path from the pressure on (the free
-    // surface found once: the positions and densities are the step's throughout).
+    // surface, the walls' moments and what of the force depends on the positions alone
+    // found once: the positions and densities are the step's throughout).
     st.pressure = pressure_;
-    fluid.computePressureFromState(/*same_surface=*/iterations > 0);
+    fluid.computePressureFromState(/*same_positions=*/iterations > 0);
     boundaries.computeSamplePressure(fluid, at, gravity, pairs, samples);
     boundaries.addWallPressure(fluid, at, pairs, samples, wall_unused_, fluid.wallPressureSums());
     fluid.computePressureAccelerations(&derivatives, /*same_positions=*/iterations > 0);

@@ -493,11 +493,11 @@ void Fluid::computePressure() {
   pressureTerms(true);
 }
 
-void Fluid::computePressureFromState(bool same_surface) {
-  pressureTerms(false, same_surface);
+void Fluid::computePressureFromState(bool same_positions) {
+  pressureTerms(false, same_positions);
 }
 
-void Fluid::pressureTerms(bool from_density, bool same_surface) {
+void Fluid::pressureTerms(bool from_density, bool same_positions) {
   const std::int64_t n = static_cast<std::int64_t>(state_.size());
   inv_rho_.resize(state_.size());
   pressure_term_ = true;
@@ -512,7 +512,8 @@ void Fluid::pressureTerms(bool from_density, bool same_surface) {
   }
   const std::size_t un = state_.size();
   wall_sums_.difference.assign(un, Vec3::Zero());
-  wall_sums_.moment.assign(un, std::array<double, 6>{});
+  wall_sums_.moments = !same_positions || wall_sums_.moment.size() != un;
+  if (wall_sums_.moments) wall_sums_.moment.assign(un, std::array<double, 6>{});
   wall_sums_.spread.assign(un, Vec3::Zero());
   wall_sums_.symmetric.assign(un, Vec3::Zero());
   if (neighbors_.size() != un) {  // no lists yet: each particle's own pressure
@@ -521,7 +522,7 @@ void Fluid::pressureTerms(bool from_density, bool same_surface) {
     wall_sums_.reference = state_.pressure;
     return;
   }
-  raiseSurfacePressure(same_surface && surface_.size() == un);
+  raiseSurfacePressure(same_positions && surface_.size() == un);
   // The lowest pressure of each particle and its neighbours: a symmetric pair loop as the
   // others (each pair once, both sides; a minimum does not depend on the order).
   wall_sums_.reference = state_.pressure;

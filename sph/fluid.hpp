@@ -150,6 +150,10 @@ struct WallPressureSums {
   std::vector<Vec3> difference;  ///< (n) sum_k V_k (P_k - P_a) grad W_ak (Pa / m)
   /// (n) sum_k V_k grad W_ak (x_k - x_a)^T, symmetric: xx, yy, zz, xy, xz, yz
   std::vector<std::array<double, 6>> moment;
+  /// Whether the walls are to add their moments: false when the positions are those of the
+  /// last evaluation (Fluid::computePressureFromState's same_positions), whose moments are
+  /// kept as they are.
+  bool moments = true;
   /// (n) sum_k rho0 V_k (1 / rho_a^2 + 1 / rho_k^2) grad W_ak (m^4 / kg): the walls' share
   /// of the symmetric form's zero-order error E_a
   std::vector<Vec3> spread;
@@ -248,10 +252,11 @@ class Fluid {
   /// computePressure with the state's pressure as it is instead of Tait's (a pressure
   /// solver's, coupling/consistent_solve.hpp): the free surface's raise, the references and
   /// the walls' sums cleared, the densities' 1 / rho; the pressure term on.
-  /// `same_surface`: the positions and densities are those of the last call, so the free
-  /// surface's particles and normals it found (a pass over the pairs) are taken as they are
-  /// (a solver's iterations on one step); the result is the same bits.
-  void computePressureFromState(bool same_surface = false);
+  /// `same_positions`: the positions and densities are those of the last call, so the free
+  /// surface's particles and normals it found (a pass over the pairs) and the walls'
+  /// moments (WallPressureSums::moments) are taken as they are (a solver's iterations on
+  /// one step); the result is the same bits.
+  void computePressureFromState(bool same_positions = false);
   /// PressureGradient::Consistent's constants (computeAccelerations, raiseSurfacePressure;
   /// docs/forces.md has the measurements that chose them).
   static constexpr double kRepulsion = 0.3;
@@ -402,8 +407,8 @@ class Fluid {
   void accelerationPass(const Vec3& gravity, const std::vector<Vec3>& extra,
                         const PairDerivatives* derivatives, bool pressure_only);
   /// computePressure and computePressureFromState: the pressure from Tait's equation or as
-  /// it is; `same_surface` as computePressureFromState's.
-  void pressureTerms(bool from_density, bool same_surface = false);
+  /// it is; `same_positions` as computePressureFromState's.
+  void pressureTerms(bool from_density, bool same_positions = false);
   /// PressureGradient::Consistent, after the equation of state: a particle at the free
   /// surface (density < kSurfaceDensity rho0 and |sum_b V_b grad W_ab| H > kSurfaceColour)
   /// gets at least the pressure that vanishes r beyond it along its outward normal n (minus

@@ -308,7 +308,7 @@ TEST(ConsistentPressure, ThePressureAloneOnTheSamePositionsIsAFreshEvaluation) {
     for (double& p : other)
       p = 2000.0 * (1.0 + u(rng));
     st.pressure = other;
-    fluid.computePressureFromState(/*same_surface=*/true);
+    fluid.computePressureFromState(/*same_positions=*/true);
     fluid.computePressureAccelerations(nullptr, /*same_positions=*/true);
     const std::vector<Vec3> kept = st.acceleration;
     const std::vector<double> kept_p = st.pressure;
