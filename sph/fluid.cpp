@@ -320,6 +320,20 @@ inline void pairOffsets(const Vec3* x, std::int64_t i, const std::uint32_t* j, M
   dz = M::all(x[i].z()) - zj;
 }
 
+/// A group's W'(r) / r (a lane per neighbour): the `used` values stored at the lists'
+/// position `at` of `known` (an unused lane repeats the first pair, as its index does), or,
+/// without stored values, found from the squared distances.
+template <class M>
+inline M groupDerivatives(const double* known, std::uint64_t at, int used, const M& r_sq,
+                          const CubicSplineKernel& kernel) {
+  if (!known) return kernel.derivativeOverR(sqrt(r_sq));
+  if (used == M::kWidth) return M::load(known + at);
+  double d[M::kWidth];
+  for (int t = 0; t < M::kWidth; ++t)
+    d[t] = known[at + (t < used ? t : 0)];
+  return M::load(d);
+}
+
 /// A group's per-pair terms (u: N sums, one vector per sum, a lane per neighbour) as
 /// rows: row[t][k] holds the sums [k W, k W + W) of neighbour t (W = the row's width; N a
 /// multiple of 4). A transpose per group instead of a shuffle per sum and neighbour.
@@ -751,15 +765,7 @@ inline void accelerationRange(std::int64_t i0, std::int64_t i1, std::size_t r,
       gather3Lanes(px, xj, yj, zj);
       const M dx = M::all(x[i].x()) - xj, dy = M::all(x[i].y()) - yj, dz = M::all(x[i].z()) - zj;
       const M r_sq = dx * dx + dy * dy + dz * dz;
-      auto stored = [&]() {
-        if (used == M::kWidth) return M::load(known + at);
-        // An unused lane repeats the first pair, as its index does.
-        double d[M::kWidth];
-        for (int t = 0; t < M::kWidth; ++t)
-          d[t] = known[at + (t < used ? t : 0)];
-        return M::load(d);
-      };
-      const M dwr = known ? stored() : kernel.derivativeOverR(sqrt(r_sq));
+      const M dwr = groupDerivatives(known, at, used, r_sq, kernel);
       at += static_cast<std::uint64_t>(used);
       const M inv_rho_j = gatherLanes(zero, in.inv_rho, j);
       // The viscous terms and the symmetric pressure term (none with kPressureOnly).
@@ -880,15 +886,7 @@ inline void pressureSumsRange(std::int64_t i0, std::int64_t i1, std::size_t r,
       const M zero = M::all(0.0);
       M dx, dy, dz;
       pairOffsets(x, i, j, dx, dy, dz);
-      M dwr;
-      if (known) {
-        double d[M::kWidth];  // an unused lane repeats the first pair, as its index does
-        for (int t = 0; t < M::kWidth; ++t)
-          d[t] = known[at + (t < used ? t : 0)];
-        dwr = M::load(d);
-      } else {
-        dwr = kernel.derivativeOverR(sqrt(dx * dx + dy * dy + dz * dz));
-      }
+      const M dwr = groupDerivatives(known, at, used, dx * dx + dy * dy + dz * dz, kernel);
       at += static_cast<std::uint64_t>(used);
       const M inv_rho_j = gatherLanes(zero, in.inv_rho, j);
       const M pj = gatherLanes(zero, in.gradient_p, j);
