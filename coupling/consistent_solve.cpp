@@ -73,7 +73,9 @@ int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
   rate_.resize(un);
   step_.resize(un);
   wall_unused_.assign(un, Vec3::Zero());
-  int iterations = 0;
+  int iterations = 0, best_iteration = 0;
+  double best_error = 0.0;
+  bool converged = false;
   for (;; ++iterations) {
     // The pressure's accelerations with p: WCSPH's path from the pressure on (the free
     // surface, the walls' moments and what of the force depends on the positions alone
@@ -118,12 +120,33 @@ int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
     for (std::size_t i = 0; i < un; ++i)
       sum += rate_[i];
     error = sum / (double(un) * rho0);
-    if ((error <= params.max_density_error && iterations >= 2) ||
-        iterations >= params.max_iterations)
+    if (error <= params.max_density_error && iterations >= 2) {
+      converged = true;
       break;
+    }
+    // The best iterate so far, kept: where the Jacobi iteration stalls or turns away (a
+    // squeezed film beside a jammed body: a lone particle's pressure the consistent force
+    // barely answers grows each iteration), the solve ends on it.
+    if (iterations == 0 || error < best_error) {
+      best_error = error;
+      best_iteration = iterations;
+      best_pressure_ = pressure_;
+      best_velocity_ = velocity_;
+    } else if (iterations - best_iteration >= kPatience) {
+      break;
+    }
+    if (iterations >= params.max_iterations) break;
 #pragma omp parallel for schedule(static)
     for (std::int64_t i = 0; i < n; ++i)
       pressure_[i] = std::max(0.0, st.pressure[i] + kRelaxation * step_[i]);
+  }
+  if (!converged && error > best_error) {
+    // Back to the best iterate: its pressure (with the free surface's raise) and samples.
+    st.pressure = best_pressure_;
+    fluid.computePressureFromState(/*same_positions=*/true);
+    boundaries.computeSamplePressure(fluid, at, gravity, pairs, samples);
+    velocity_.swap(best_velocity_);
+    error = best_error;
   }
   st.velocity = velocity_;
   return iterations;

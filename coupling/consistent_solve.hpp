@@ -22,9 +22,11 @@
 // tank, the consistent operator's diagonal is 0.98-1.09 of it), never below 0; a particle
 // with e_a < 0 gives up pressure it has, as one with e_a > 0 takes more. It starts from the
 // pressure the equation of state gives the density at the step's start, max(0, c^2 (rho_a -
-// rho0)), not from the last step's pressure (the .cpp says why). The bodies' pressure force is
-// their samples' pressure (Boundaries::addBodyPressure), as with WCSPH; they see the solve's
-// pressure after it, not within it.
+// rho0)), not from the last step's pressure (the .cpp says why). It ends when the mean
+// deviation counted is under max_density_error, at max_iterations, or, where the iteration
+// stalls or turns away (kPatience iterations without a smaller mean), on its best iterate.
+// The bodies' pressure force is their samples' pressure (Boundaries::addBodyPressure), as
+// with WCSPH; they see the solve's pressure after it, not within it.
 //
 // Why the compliance p / c^2: without it (the rest density itself, as DFSPH's own density
 // solve) the solve was unstable. The consistent force gives a uniformly raised pressure no
@@ -51,6 +53,9 @@ class ConsistentDensitySolve {
  public:
   /// Relaxation of the Jacobi step (0, 1].
   static constexpr double kRelaxation = 0.5;
+  /// Iterations without a smaller average deviation after which the solve ends on its best
+  /// iterate (the iteration stalls or turns away; the .cpp says where).
+  static constexpr int kPatience = 10;
 
   /// Finds the pressure for the predicted velocities (the state's, every non-pressure
   /// force in them) and applies its accelerations over dt to them; the state's pressure is
@@ -67,8 +72,8 @@ class ConsistentDensitySolve {
             double dt, double& error);
 
  private:
-  std::vector<Vec3> predicted_, velocity_, wall_unused_, gradient_sum_;
-  std::vector<double> pressure_, factor_, rate_, step_;
+  std::vector<Vec3> predicted_, velocity_, best_velocity_, wall_unused_, gradient_sum_;
+  std::vector<double> pressure_, best_pressure_, factor_, rate_, step_;
 };
 
 }  // namespace wake

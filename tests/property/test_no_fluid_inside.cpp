@@ -64,11 +64,14 @@ Case randomCase(unsigned seed, CouplingMethod method, double radius, double ligh
   Case c;
   const double sp = 2 * radius;
   // Bodies and plate start below `height`; the walls go up to `rim`, high enough for the
-  // splashes: seed 18 (a box of 2.6 the water's density jammed across the tank, dropped
-  // into it) squeezes a jet up the narrow walls at 2 m/s that reached 0.20 m with contacts
-  // at r and, with contacts at r/2, threw one particle over a rim at 0.25 m (to 0.258 m).
+  // splashes, so that a particle lost went through a wall: a dense body dropped into the
+  // tank squeezes jets up its walls. Seed 18 (a box of 2.6 the water's density jammed
+  // across the tank) threw one at 2 m/s to 0.258 m, over a rim at 0.25 m; seed 8 (WCSPH,
+  // local: a box of 2.2 entering at 1.3 m/s) one at 2.5 m/s to 0.433 m and seed 7 (the
+  // consistent pressure force, local: a jammed capsule of 2.9) one at 2.9 m/s to 0.586 m,
+  // over a rim at 0.35 m. A jet of 4 m/s rises 0.8 m.
   const double width = uniform(0.10, 0.20), narrow = uniform(0.05, 0.10), height = 0.25;
-  const double rim = 0.35;
+  const double rim = 1.0;
   const double fill = uniform(0.06, 0.12);
   const double slip = seed % 2 == 0 ? 0.0 : 1.0;
   c.sim.fluid.particle_radius = radius;
@@ -197,9 +200,10 @@ void trace(const Simulation& sim, double t) {
 
 /// Cases first .. first + cases - 1 (WAKE_PROPERTY_CASES, WAKE_PROPERTY_SEED and
 /// WAKE_PROPERTY_DENSITY_MIN / _MAX replace the defaults; WAKE_PROPERTY_DFSPH_CONSISTENT=1
-/// gives the divergence-free cases the consistent pressure force).
+/// gives the divergence-free cases the consistent pressure force, as `consistent` does).
 void runCases(CouplingMethod method, FluidSolver solver = FluidSolver::Wcsph, int default_cases = 3,
-              int default_seed = 1, double lightest = 0.2, double heaviest = 3.0) {
+              int default_seed = 1, double lightest = 0.2, double heaviest = 3.0,
+              bool consistent = false) {
   const int cases = envInt("WAKE_PROPERTY_CASES", default_cases);
   const unsigned first = unsigned(envInt("WAKE_PROPERTY_SEED", default_seed));
   const double radius = envDouble("WAKE_PROPERTY_RADIUS", 0.005);
@@ -213,7 +217,7 @@ void runCases(CouplingMethod method, FluidSolver solver = FluidSolver::Wcsph, in
       c.sim.cfl = envDouble("WAKE_PROPERTY_DFSPH_CFL", 0.6);
       c.sim.max_dt = envDouble("WAKE_PROPERTY_DFSPH_MAX_DT", 4e-3);
       c.text += " dfsph;";
-      if (envInt("WAKE_PROPERTY_DFSPH_CONSISTENT", 0)) {
+      if (consistent || envInt("WAKE_PROPERTY_DFSPH_CONSISTENT", 0)) {
         c.sim.dfsph.pressure_force = DfsphParams::PressureForce::Consistent;
         c.text += " consistent;";
       }
@@ -281,6 +285,16 @@ TEST(NoFluidInside, DivergenceFreeSolveHoldsVeryLightBodies) {
   // it stopped rocking; before, the divergence solve diverged (753 particles out of the
   // tank; 321 with the bodies held at their velocities through the solves).
   runCases(CouplingMethod::Global, FluidSolver::Dfsph, 1, 2015, 0.05, 0.3);
+}
+
+TEST(NoFluidInside, ConsistentDensitySolveEndsOnItsBestIterate) {
+  // Seed 17 with the consistent pressure force: a box of 2.4 the water's density jammed
+  // across the tank sinks through the water under the plate. In one 3.3 ms step the
+  // Jacobi iteration turned away after 40 iterations (the average deviation 7.5e-4, then
+  // 1.75e-3 at 100): one particle beside the box, its neighbours at 5 kPa or less, was
+  // at 34 kPa, went from 0.45 to 7.7 m/s and through the tank's wall. The solve now ends on
+  // its best iterate (ConsistentDensitySolve::kPatience).
+  runCases(CouplingMethod::Global, FluidSolver::Dfsph, 1, 17, 0.2, 3.0, /*consistent=*/true);
 }
 
 }  // namespace
