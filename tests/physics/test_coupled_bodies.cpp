@@ -409,7 +409,7 @@ Landing landOnFloor(FluidSolver solver, double ratio, CouplingMethod method, dou
 void checkSinks(FluidSolver solver, double ratio, CouplingMethod method, double slip) {
   const Landing f = landOnFloor(solver, ratio, method, slip);
   std::printf(
-      "[ sinking ] %s%s density ratio %.1f slip %.0f: landed at %.3f s, within r/4 of the floor "
+      "[ sinking ] %s%s density ratio %.2f slip %.0f: landed at %.3f s, within r/4 of the floor "
       "for good %.3f s later; lowest point from 0.5 s after %.5f m (r/4 = %.5f), fluid force "
       "%.3f of Archimedes, density ratio %.3f (before landing %.3f), speed %.4f m/s\n",
       solver == FluidSolver::Dfsph ? "dfsph " : "", name(method), ratio, slip, f.landed,
@@ -432,6 +432,20 @@ INSTANTIATE_TEST_SUITE_P(DISABLED_Dfsph, Sinking, ::testing::Values(FluidSolver:
 
 TEST_P(Sinking, DenseBoxSinksToTheFloorAndStays) {
   checkSinks(solver(), 2.0, CouplingMethod::Global, 0.0);  // no-slip walls and body
+}
+
+/// Boxes a little denser than the fluid (1.15 and 1.3 times, no-slip walls and body, global
+/// control) do not rest on the floor: the 1.15 box stays on one layer of particles (its
+/// lowest point up to 5 mm, r, above the floor 0.5 s after landing, the fluid carrying 1.150
+/// of Archimedes' force: all its weight), the 1.3 box comes down to the floor but rocks on
+/// it (0.02 m/s at the end, the fluid carrying 1.187). docs/forces.md, "Films drain": open,
+/// instantiated disabled (`--gtest_also_run_disabled_tests
+/// --gtest_filter='DISABLED_Ratios/SinkingNearNeutral.*'`, about 65 s each on two threads).
+class SinkingNearNeutral : public ::testing::TestWithParam<double> {};
+INSTANTIATE_TEST_SUITE_P(DISABLED_Ratios, SinkingNearNeutral, ::testing::Values(1.15, 1.3));
+
+TEST_P(SinkingNearNeutral, BoxSinksToTheFloorAndStays) {
+  checkSinks(FluidSolver::Wcsph, GetParam(), CouplingMethod::Global, 0.0);
 }
 
 class SinkingFreeSlip : public test::SolverTest {};
