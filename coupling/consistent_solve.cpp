@@ -73,23 +73,26 @@ int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
   rate_.resize(un);
   step_.resize(un);
   wall_unused_.assign(un, Vec3::Zero());
+  // The pressure's accelerations with p: WCSPH's path from the pressure on (the free
+  // surface, the walls' moments and what of the force depends on the positions alone found
+  // once: the positions and densities are the step's throughout), and the velocities they
+  // give, into velocity_.
+  auto apply = [&](const std::vector<double>& p, bool same_positions) {
+    st.pressure = p;
+    fluid.computePressureFromState(same_positions);
+    boundaries.computeSamplePressure(fluid, at, gravity, pairs, samples);
+    boundaries.addWallPressure(fluid, at, pairs, samples, wall_unused_, fluid.wallPressureSums());
+    fluid.computePressureAccelerations(&derivatives, same_positions);
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i)
+      velocity_[i] = predicted_[i] + dt * st.acceleration[i];
+  };
   int iterations = 0, best_iteration = 0;
   double best_error = 0.0;
   bool converged = false;
   for (;; ++iterations) {
-    // The pressure's accelerations with p: WCSPH's path from the pressure on (the free
-    // surface, the walls' moments and what of the force depends on the positions alone
-    // found once: the positions and densities are the step's throughout).
-    st.pressure = pressure_;
-    fluid.computePressureFromState(/*same_positions=*/iterations > 0);
-    boundaries.computeSamplePressure(fluid, at, gravity, pairs, samples);
-    boundaries.addWallPressure(fluid, at, pairs, samples, wall_unused_, fluid.wallPressureSums());
-    fluid.computePressureAccelerations(&derivatives, /*same_positions=*/iterations > 0);
-#pragma omp parallel for schedule(static)
-    for (std::int64_t i = 0; i < n; ++i) {
-      velocity_[i] = predicted_[i] + dt * st.acceleration[i];
-      rate_[i] = 0.0;
-    }
+    apply(pressure_, /*same_positions=*/iterations > 0);
+    std::fill(rate_.begin(), rate_.end(), 0.0);
     forEachPairOnceWith(lists, derivatives.later, derivatives.before,
                         [&](std::size_t i, std::uint32_t j, bool both, double dwr) {
                           const Vec3 g = gradient(i, j, dwr);
@@ -131,7 +134,6 @@ int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
       best_error = error;
       best_iteration = iterations;
       best_pressure_ = pressure_;
-      best_velocity_ = velocity_;
     } else if (iterations - best_iteration >= kPatience) {
       break;
     }
@@ -141,11 +143,9 @@ int ConsistentDensitySolve::solve(Fluid& fluid, const Boundaries& boundaries,
       pressure_[i] = std::max(0.0, st.pressure[i] + kRelaxation * step_[i]);
   }
   if (!converged && error > best_error) {
-    // Back to the best iterate: its pressure (with the free surface's raise) and samples.
-    st.pressure = best_pressure_;
-    fluid.computePressureFromState(/*same_positions=*/true);
-    boundaries.computeSamplePressure(fluid, at, gravity, pairs, samples);
-    velocity_.swap(best_velocity_);
+    // Back to the best iterate: its pressure (with the free surface's raise), samples and
+    // velocities, found again (the same bits as when it was evaluated).
+    apply(best_pressure_, /*same_positions=*/true);
     error = best_error;
   }
   st.velocity = velocity_;

@@ -72,7 +72,7 @@ class ConsistentDensitySolve {
             double dt, double& error);
 
  private:
-  std::vector<Vec3> predicted_, velocity_, best_velocity_, wall_unused_, gradient_sum_;
+  std::vector<Vec3> predicted_, velocity_, wall_unused_, gradient_sum_;
   std::vector<double> pressure_, best_pressure_, factor_, rate_, step_;
 };
 
